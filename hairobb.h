@@ -1,0 +1,1454 @@
+/* hairobb.h - v0.1.0 - ray tracing of hair and fur with a mixed AABB/OBB BVH
+   single-file C library, public domain or MIT (see the end of the file)
+
+   WHAT IT DOES
+     Builds a 4-wide bounding volume hierarchy over cubic Bezier hair segments
+     and intersects rays with them. Groups of neighbouring hairs point the same
+     way, so boxes oriented along the hair ("hair space") bound them far more
+     tightly than axis-aligned boxes; the builder decides per node, by the
+     surface area heuristic, whether an axis-aligned (AABB) or an oriented
+     (OBB) node pays (Woop, Benthin, Wald, Johnson, Tabellion, HPG 2014).
+
+   HOW TO USE
+     In exactly one C or C++ file:
+         #define HAIROBB_IMPLEMENTATION
+         #include "hairobb.h"
+     Everywhere else just #include "hairobb.h".
+
+     float    vertices[] = { x,y,z,radius, x,y,z,radius, ... };   // 4 per segment
+     uint32_t indices[]  = { 0, 4, 8, ... };         // first control point of each segment
+     hairobb_bvh *bvh;
+     hairobb_result res = hairobb_build(vertices, vertex_count, indices, segment_count,
+                                        NULL, &bvh);          // NULL: default options
+     if (res != HAIROBB_OK) { puts(hairobb_result_string(res)); return 1; }
+     hairobb_ray ray = { {0,0,-5}, 0.0f, {0,0,1}, INFINITY };
+     hairobb_hit hit;
+     if (hairobb_intersect1(bvh, &ray, &hit)) printf("segment %u at t=%g\n", hit.prim_id, hit.t);
+     hairobb_free(bvh);
+
+   INPUT
+     The vertex and index layout is Embree's curve layout, so a renderer can hand
+     the same buffers to either library: vertices are 4 floats per control point
+     (x, y, z, radius), indices[i] is the first of the 4 consecutive control
+     points of segment i. Position and radius are cubic Bezier curves in u.
+     No alignment is required.
+
+     MEMORY LIFETIME: the BVH keeps pointers to the caller's vertex and index
+     arrays and reads them while tracing (it copies nothing the caller already
+     holds). They must stay alive and unchanged until hairobb_free; to change
+     the hair, build again.
+
+   THE SURFACE
+     Each segment is a ray-facing ribbon (Embree's "flat" curve). In ray space
+     (origin at the ray origin, z along the normalised direction) let P(u) and
+     r(u) be the segment's position and radius and P2 = (x, y) the projection.
+     The ribbon is hit at u in [0,1] where dot(P2(u), P2'(u)) = 0 and
+     |P2(u)| <= r(u); t = z(u)/|dir| (org + t*dir is on the curve's centre line).
+     The first hit is the smallest t in [tnear, tfar] over all segments.
+     v in [-1,1] is the signed position across the ribbon:
+       v = dot(cross(T, X - C), dir/|dir|) / (|T_perp| r(u)),
+     T = P'(u), C = P(u), X = org + t*dir, T_perp = T without its component
+     along dir. The default intersector finds the roots of dot(P2, P2') with a
+     bracketed Newton iteration after a conservative test against 8 linear
+     pieces, so its hits agree with this definition up to float rounding.
+
+   BUILD OPTIONS (hairobb_build_options; a zero-initialised struct = defaults)
+     nodes                   HAIROBB_NODES_MIXED (default): AABB or OBB per node
+                             by SAH; _AABB_ONLY and _OBB_ONLY for comparisons.
+     max_leaf_size           segments per leaf at most, 0 = 4, at most 15.
+     hair_space_candidates   rotations tried per node (main directions of
+                             sampled segments), 0 = 4, at most 16.
+     curve_pieces            linear pieces per segment in the intersector's
+                             first test, 0 = 8, at most 16.
+     precision               HAIROBB_PRECISION_EXACT (default): roots refined to
+                             the surface above. HAIROBB_PRECISION_PIECES: the
+                             linear pieces alone, faster, less accurate.
+     allocator_user          passed to HAIROBB_MALLOC/HAIROBB_FREE.
+
+   THREAD SAFETY
+     hairobb_intersect1/hairobb_occluded1 only read the BVH: any number of
+     threads may trace one BVH at once. There is no global state.
+
+   CONFIGURATION MACROS (define before including the implementation)
+     HAIROBB_MALLOC(size, user), HAIROBB_FREE(ptr, user)   allocation; define
+                             both or neither. user = options->allocator_user.
+     HAIROBB_ASSERT(x)       internal checks, default assert().
+     HAIROBB_STATIC          make every function static to the including file.
+     HAIROBB_NO_SIMD         plain C everywhere (same answers as the SIMD paths).
+     SSE is used on x86-64; AVX for the 8-wide curve evaluation when the
+     compiler targets it (-mavx or -march=...).
+
+   ERRORS
+     hairobb_build returns a hairobb_result; hairobb_result_string names it.
+     The library never prints and never exits.
+*/
+#ifndef HAIROBB_H
+#define HAIROBB_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#define HAIROBB_VERSION_MAJOR 0
+#define HAIROBB_VERSION_MINOR 1
+#define HAIROBB_VERSION_PATCH 0
+#define HAIROBB_VERSION (HAIROBB_VERSION_MAJOR * 10000 + HAIROBB_VERSION_MINOR * 100 + HAIROBB_VERSION_PATCH)
+
+#if defined(HAIROBB_STATIC) && (defined(__GNUC__) || defined(__clang__))
+#define HAIROBB_DEF static __attribute__((unused)) /* a file need not call every function */
+#elif defined(HAIROBB_STATIC)
+#define HAIROBB_DEF static
+#else
+#define HAIROBB_DEF extern
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum hairobb_result {
+    HAIROBB_OK = 0,
+    HAIROBB_ERROR_INVALID_ARGUMENT,   /* NULL pointer, zero segments, bad option value */
+    HAIROBB_ERROR_INDEX_OUT_OF_RANGE, /* indices[i] + 3 >= vertex_count */
+    HAIROBB_ERROR_INVALID_GEOMETRY,   /* NaN/Inf or |coordinate| > 1e18, negative radius */
+    HAIROBB_ERROR_OUT_OF_MEMORY,      /* HAIROBB_MALLOC returned NULL */
+    HAIROBB_ERROR_TOO_LARGE           /* counts whose byte sizes overflow, > 2^32-1 segments */
+} hairobb_result;
+
+HAIROBB_DEF const char *hairobb_result_string(hairobb_result r);
+
+typedef enum hairobb_node_policy {
+    HAIROBB_NODES_MIXED = 0,
+    HAIROBB_NODES_AABB_ONLY,
+    HAIROBB_NODES_OBB_ONLY
+} hairobb_node_policy;
+
+typedef enum hairobb_precision {
+    HAIROBB_PRECISION_EXACT = 0,  /* roots of dot(P2,P2') refined: the surface as defined */
+    HAIROBB_PRECISION_PIECES      /* linear pieces only (like Embree's flat curves) */
+} hairobb_precision;
+
+typedef struct hairobb_build_options {
+    hairobb_node_policy nodes;
+    unsigned max_leaf_size;          /* 0 = 4; 1..15 */
+    unsigned hair_space_candidates;  /* 0 = 4; 1..16 */
+    unsigned curve_pieces;           /* 0 = 8; 1..16 */
+    hairobb_precision precision;
+    void *allocator_user;
+} hairobb_build_options;
+
+typedef struct hairobb_bvh hairobb_bvh;
+
+/* Builds a BVH over segment_count segments. options may be NULL (defaults).
+   The BVH keeps pointers to vertices and indices (see MEMORY LIFETIME).
+   On failure *out is NULL and nothing is leaked. */
+HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_count,
+                                         const uint32_t *indices, size_t segment_count,
+                                         const hairobb_build_options *options, hairobb_bvh **out);
+HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh);
+
+/* Every byte the BVH allocated (the caller's arrays are not counted). */
+HAIROBB_DEF size_t hairobb_memory_bytes(const hairobb_bvh *bvh);
+
+typedef struct hairobb_stats {
+    size_t aabb_nodes, obb_nodes, leaves;
+    size_t leaf_references;   /* segment references in leaves */
+    unsigned max_depth;       /* root = 0 */
+    size_t node_bytes, leaf_bytes;
+} hairobb_stats;
+HAIROBB_DEF void hairobb_get_stats(const hairobb_bvh *bvh, hairobb_stats *stats);
+
+/* Bounds of all ribbons, radius included. */
+HAIROBB_DEF void hairobb_bounds(const hairobb_bvh *bvh, float lower[3], float upper[3]);
+
+typedef struct hairobb_ray {
+    float org[3]; float tnear;
+    float dir[3]; float tfar;   /* dir need not be normalised; t is in units of |dir| */
+} hairobb_ray;
+
+#define HAIROBB_INVALID_ID 0xffffffffu
+
+typedef struct hairobb_hit {
+    float t, u, v;      /* distance, curve parameter, signed position across the ribbon */
+    float Ng[3];        /* unit geometric normal of the ribbon, facing the ray origin */
+    float tangent[3];   /* dP/du at u in world space, not normalised */
+    uint32_t prim_id;   /* segment index, HAIROBB_INVALID_ID on a miss */
+} hairobb_hit;
+
+/* 1: nearest hit in [tnear, tfar] written to *hit; 0: miss, hit->prim_id = HAIROBB_INVALID_ID. */
+HAIROBB_DEF int hairobb_intersect1(const hairobb_bvh *bvh, const hairobb_ray *ray, hairobb_hit *hit);
+/* 1: some segment is hit in [tnear, tfar]; stops at the first one found. */
+HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* HAIROBB_H */
+
+/* ======================================================================== */
+/*                              IMPLEMENTATION                              */
+/* ======================================================================== */
+#ifdef HAIROBB_IMPLEMENTATION
+#ifndef HAIROBB_IMPLEMENTATION_DONE
+#define HAIROBB_IMPLEMENTATION_DONE
+
+#include <float.h>
+#include <math.h>
+#include <string.h>
+
+#if defined(HAIROBB_MALLOC) != defined(HAIROBB_FREE)
+#error "define both HAIROBB_MALLOC and HAIROBB_FREE, or neither"
+#endif
+#ifndef HAIROBB_MALLOC
+#include <stdlib.h>
+#define HAIROBB_MALLOC(size, user) ((void)(user), malloc(size))
+#define HAIROBB_FREE(ptr, user) ((void)(user), free(ptr))
+#endif
+#ifndef HAIROBB_ASSERT
+#include <assert.h>
+#define HAIROBB_ASSERT(x) assert(x)
+#endif
+
+#if !defined(HAIROBB_NO_SIMD) && (defined(__SSE2__) || defined(_M_X64))
+#define HAIROBB__SSE 1
+#include <emmintrin.h>
+#if defined(__AVX__)
+#define HAIROBB__AVX 1
+#include <immintrin.h>
+#endif
+#endif
+
+#ifdef __cplusplus
+#define HAIROBB__CAST(type, x) (static_cast<type>(x))
+#else
+#define HAIROBB__CAST(type, x) ((type)(x))
+#endif
+
+/* ------------------------------------------------------------------------ */
+/* Limits and cost model                                                     */
+/* ------------------------------------------------------------------------ */
+#define HAIROBB__BINS 16
+#define HAIROBB__MAX_PIECES 16
+#define HAIROBB__MAX_LEAF 15
+#define HAIROBB__MAX_CANDIDATES 16
+#define HAIROBB__MAX_COORD 1e18f        /* beyond this, box areas overflow float */
+#define HAIROBB__SAH_DEPTH 40           /* deeper nodes split at the median, so depth stays bounded */
+#define HAIROBB__STACK 256              /* > 3 * (SAH_DEPTH + 32) + 1 */
+#define HAIROBB__SAMPLE 64              /* segments sampled to rank hair-space candidates */
+/* Relative costs of testing one child box and intersecting one segment.
+   An OBB child costs a 3x4 transform of the ray before its slab test. */
+#define HAIROBB__COST_AABB 1.0f
+#define HAIROBB__COST_OBB 2.0f
+#define HAIROBB__COST_SEGMENT 4.0f
+
+/* Node references: low 4 bits type; inner nodes: byte offset (32-aligned);
+   leaves: first index into leaf_prims << 8 | count << 4. */
+#define HAIROBB__REF_AABB 0u
+#define HAIROBB__REF_OBB 1u
+#define HAIROBB__REF_LEAF 2u
+#define HAIROBB__REF_EMPTY 3u
+#define HAIROBB__REF_TYPE(ref) ((unsigned)((ref) & 15u))
+
+/* ------------------------------------------------------------------------ */
+/* Small vector helpers                                                      */
+/* ------------------------------------------------------------------------ */
+static float hairobb__minf(float a, float b) { return a < b ? a : b; }
+static float hairobb__maxf(float a, float b) { return a > b ? a : b; }
+static float hairobb__dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+/* Rows 0,1 span the plane orthogonal to n (unit), row 2 = n, right-handed
+   (row0 x row1 = row2). Branch-free basis of Duff et al. 2017. */
+static void hairobb__frame_from_direction(const float n[3], float frame[9])
+{
+    float sign = n[2] >= 0.0f ? 1.0f : -1.0f;
+    float a = -1.0f / (sign + n[2]);
+    float b = n[0] * n[1] * a;
+    frame[0] = 1.0f + sign * n[0] * n[0] * a; frame[1] = sign * b; frame[2] = -sign * n[0];
+    frame[3] = b; frame[4] = sign + n[1] * n[1] * a; frame[5] = -n[1];
+    frame[6] = n[0]; frame[7] = n[1]; frame[8] = n[2];
+}
+
+static void hairobb__identity_frame(float frame[9])
+{
+    memset(frame, 0, 9 * sizeof(float));
+    frame[0] = frame[4] = frame[8] = 1.0f;
+}
+
+/* Widens [lower, upper] by a few float ulps of the largest magnitude involved,
+   so that rounding in the traversal's transform of the ray cannot make a ray
+   that touches the true box miss the stored one. */
+static void hairobb__pad_box(float lower[3], float upper[3])
+{
+    int k;
+    for (k = 0; k < 3; ++k) {
+        float mag = hairobb__maxf(hairobb__maxf(fabsf(lower[k]), fabsf(upper[k])), upper[k] - lower[k]);
+        float pad = mag * (1.0f / 524288.0f) + 1e-30f;  /* 2^-19 relative */
+        lower[k] -= pad;
+        upper[k] += pad;
+    }
+}
+
+static float hairobb__half_area(const float lower[3], const float upper[3])
+{
+    float dx = upper[0] - lower[0], dy = upper[1] - lower[1], dz = upper[2] - lower[2];
+    return dx * dy + dy * dz + dz * dx;
+}
+
+static void hairobb__box_empty(float lower[3], float upper[3])
+{
+    int k;
+    for (k = 0; k < 3; ++k) { lower[k] = FLT_MAX; upper[k] = -FLT_MAX; }
+}
+
+static void hairobb__box_grow(float lower[3], float upper[3], const float lo[3], const float hi[3])
+{
+    int k;
+    for (k = 0; k < 3; ++k) {
+        lower[k] = hairobb__minf(lower[k], lo[k]);
+        upper[k] = hairobb__maxf(upper[k], hi[k]);
+    }
+}
+
+/* Cubic Bezier value and first two derivatives at u. */
+static float hairobb__bezier(const float c[4], float u, float *d1, float *d2)
+{
+    float s = 1.0f - u;
+    float e0 = c[1] - c[0], e1 = c[2] - c[1], e2 = c[3] - c[2];
+    if (d1) *d1 = 3.0f * (s * s * e0 + 2.0f * u * s * e1 + u * u * e2);
+    if (d2) *d2 = 6.0f * (s * (e1 - e0) + u * (e2 - e1));
+    return s * s * s * c[0] + 3.0f * u * s * s * c[1] + 3.0f * u * u * s * c[2] + u * u * u * c[3];
+}
+
+/* ------------------------------------------------------------------------ */
+/* SIMD: 4 lanes for nodes, 8 lanes for curve points. Each operation has a  */
+/* plain C twin with the same rounding and the same NaN rule (min(a,b) is   */
+/* a < b ? a : b, as SSE's minps), so every path gives the same answers.    */
+/* ------------------------------------------------------------------------ */
+#if HAIROBB__SSE
+typedef __m128 hairobb__v4;
+static hairobb__v4 hairobb__v4_load(const float *p) { return _mm_loadu_ps(p); }
+static hairobb__v4 hairobb__v4_set1(float x) { return _mm_set1_ps(x); }
+static hairobb__v4 hairobb__v4_add(hairobb__v4 a, hairobb__v4 b) { return _mm_add_ps(a, b); }
+static hairobb__v4 hairobb__v4_sub(hairobb__v4 a, hairobb__v4 b) { return _mm_sub_ps(a, b); }
+static hairobb__v4 hairobb__v4_mul(hairobb__v4 a, hairobb__v4 b) { return _mm_mul_ps(a, b); }
+static hairobb__v4 hairobb__v4_div(hairobb__v4 a, hairobb__v4 b) { return _mm_div_ps(a, b); }
+static hairobb__v4 hairobb__v4_min(hairobb__v4 a, hairobb__v4 b) { return _mm_min_ps(a, b); }
+static hairobb__v4 hairobb__v4_max(hairobb__v4 a, hairobb__v4 b) { return _mm_max_ps(a, b); }
+static int hairobb__v4_le_bits(hairobb__v4 a, hairobb__v4 b) { return _mm_movemask_ps(_mm_cmple_ps(a, b)); }
+static void hairobb__v4_store(float *p, hairobb__v4 a) { _mm_storeu_ps(p, a); }
+/* x, or +-tiny where |x| < tiny: keeps 1/x finite for directions parallel to a slab. */
+static hairobb__v4 hairobb__v4_nonzero(hairobb__v4 x, float tiny)
+{
+    __m128 sign = _mm_and_ps(x, _mm_set1_ps(-0.0f));
+    __m128 small = _mm_cmplt_ps(_mm_andnot_ps(_mm_set1_ps(-0.0f), x), _mm_set1_ps(tiny));
+    __m128 replacement = _mm_or_ps(sign, _mm_set1_ps(tiny));
+    return _mm_or_ps(_mm_and_ps(small, replacement), _mm_andnot_ps(small, x));
+}
+#else
+typedef struct hairobb__v4 { float f[4]; } hairobb__v4;
+#define HAIROBB__V4_MAP(expr) hairobb__v4 r; int i; for (i = 0; i < 4; ++i) r.f[i] = (expr); return r
+static hairobb__v4 hairobb__v4_load(const float *p) { HAIROBB__V4_MAP(p[i]); }
+static hairobb__v4 hairobb__v4_set1(float x) { HAIROBB__V4_MAP(x); }
+static hairobb__v4 hairobb__v4_add(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] + b.f[i]); }
+static hairobb__v4 hairobb__v4_sub(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] - b.f[i]); }
+static hairobb__v4 hairobb__v4_mul(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] * b.f[i]); }
+static hairobb__v4 hairobb__v4_div(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] / b.f[i]); }
+static hairobb__v4 hairobb__v4_min(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] < b.f[i] ? a.f[i] : b.f[i]); }
+static hairobb__v4 hairobb__v4_max(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] > b.f[i] ? a.f[i] : b.f[i]); }
+static hairobb__v4 hairobb__v4_nonzero(hairobb__v4 x, float tiny)
+{
+    HAIROBB__V4_MAP(fabsf(x.f[i]) < tiny ? (signbit(x.f[i]) ? -tiny : tiny) : x.f[i]);
+}
+#undef HAIROBB__V4_MAP
+static int hairobb__v4_le_bits(hairobb__v4 a, hairobb__v4 b)
+{
+    int i, bits = 0;
+    for (i = 0; i < 4; ++i) bits |= (a.f[i] <= b.f[i]) << i;
+    return bits;
+}
+static void hairobb__v4_store(float *p, hairobb__v4 a) { memcpy(p, a.f, sizeof a.f); }
+#endif
+
+#if HAIROBB__AVX
+typedef __m256 hairobb__v8;
+static hairobb__v8 hairobb__v8_load(const float *p) { return _mm256_loadu_ps(p); }
+static hairobb__v8 hairobb__v8_set1(float x) { return _mm256_set1_ps(x); }
+static hairobb__v8 hairobb__v8_add(hairobb__v8 a, hairobb__v8 b) { return _mm256_add_ps(a, b); }
+static hairobb__v8 hairobb__v8_sub(hairobb__v8 a, hairobb__v8 b) { return _mm256_sub_ps(a, b); }
+static hairobb__v8 hairobb__v8_mul(hairobb__v8 a, hairobb__v8 b) { return _mm256_mul_ps(a, b); }
+static hairobb__v8 hairobb__v8_div(hairobb__v8 a, hairobb__v8 b) { return _mm256_div_ps(a, b); }
+static hairobb__v8 hairobb__v8_min(hairobb__v8 a, hairobb__v8 b) { return _mm256_min_ps(a, b); }
+static hairobb__v8 hairobb__v8_max(hairobb__v8 a, hairobb__v8 b) { return _mm256_max_ps(a, b); }
+static int hairobb__v8_le_bits(hairobb__v8 a, hairobb__v8 b) { return _mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LE_OQ)); }
+static void hairobb__v8_store(float *p, hairobb__v8 a) { _mm256_storeu_ps(p, a); }
+#else
+/* Two 4-lane halves: SSE, or plain C through the 4-lane twin above. */
+typedef struct hairobb__v8 { hairobb__v4 lo, hi; } hairobb__v8;
+#define HAIROBB__V8_PAIR(op) hairobb__v8 r; r.lo = op(a.lo, b.lo); r.hi = op(a.hi, b.hi); return r
+static hairobb__v8 hairobb__v8_load(const float *p) { hairobb__v8 r; r.lo = hairobb__v4_load(p); r.hi = hairobb__v4_load(p + 4); return r; }
+static hairobb__v8 hairobb__v8_set1(float x) { hairobb__v8 r; r.lo = r.hi = hairobb__v4_set1(x); return r; }
+static hairobb__v8 hairobb__v8_add(hairobb__v8 a, hairobb__v8 b) { HAIROBB__V8_PAIR(hairobb__v4_add); }
+static hairobb__v8 hairobb__v8_sub(hairobb__v8 a, hairobb__v8 b) { HAIROBB__V8_PAIR(hairobb__v4_sub); }
+static hairobb__v8 hairobb__v8_mul(hairobb__v8 a, hairobb__v8 b) { HAIROBB__V8_PAIR(hairobb__v4_mul); }
+static hairobb__v8 hairobb__v8_div(hairobb__v8 a, hairobb__v8 b) { HAIROBB__V8_PAIR(hairobb__v4_div); }
+static hairobb__v8 hairobb__v8_min(hairobb__v8 a, hairobb__v8 b) { HAIROBB__V8_PAIR(hairobb__v4_min); }
+static hairobb__v8 hairobb__v8_max(hairobb__v8 a, hairobb__v8 b) { HAIROBB__V8_PAIR(hairobb__v4_max); }
+#undef HAIROBB__V8_PAIR
+static int hairobb__v8_le_bits(hairobb__v8 a, hairobb__v8 b) { return hairobb__v4_le_bits(a.lo, b.lo) | (hairobb__v4_le_bits(a.hi, b.hi) << 4); }
+static void hairobb__v8_store(float *p, hairobb__v8 a) { hairobb__v4_store(p, a.lo); hairobb__v4_store(p + 4, a.hi); }
+#endif
+
+static int hairobb__lowest_bit(unsigned bits)
+{
+#if defined(__GNUC__) || defined(__clang__)
+    return __builtin_ctz(bits);
+#else
+    int i = 0;
+    while (!(bits & 1u)) { bits >>= 1; ++i; }
+    return i;
+#endif
+}
+
+/* ------------------------------------------------------------------------ */
+/* The BVH                                                                   */
+/* ------------------------------------------------------------------------ */
+/* Four axis-aligned child boxes, struct of arrays: 128 bytes. */
+typedef struct hairobb__aabb_node {
+    float lower[3][4], upper[3][4];   /* [axis][child] */
+    uint64_t child[4];
+} hairobb__aabb_node;
+
+/* Four oriented child boxes, each an affine map of world space onto the unit
+   cube: unit = M * p + m, with xfm[0..8] = M row-major and xfm[9..11] = m,
+   each entry holding the 4 children: 224 bytes. */
+typedef struct hairobb__obb_node {
+    float xfm[12][4];
+    uint64_t child[4];
+} hairobb__obb_node;
+
+struct hairobb_bvh {
+    const float *vertices;
+    const uint32_t *indices;
+    size_t vertex_count, segment_count;
+    void *allocator_user;
+    void *node_allocation;            /* what HAIROBB_MALLOC returned */
+    unsigned char *nodes;             /* 64-byte aligned inside node_allocation */
+    size_t node_bytes;
+    uint32_t *leaf_prims;             /* segment ids, leaves index ranges of it */
+    size_t leaf_prim_count;
+    uint64_t root;
+    float lower[3], upper[3];
+    hairobb_precision precision;
+    int pieces, piece_chunks;         /* linear pieces; 8-lane chunks of them */
+    unsigned chunk_valid[2];          /* lanes holding real pieces */
+    /* Bernstein weights of the pieces' start and end points: [chunk][start/end][basis][lane] */
+    float piece_weights[2][2][4][8];
+    hairobb_stats stats;
+};
+
+/* ------------------------------------------------------------------------ */
+/* Input: validation and per-segment bounds                                  */
+/* ------------------------------------------------------------------------ */
+HAIROBB_DEF const char *hairobb_result_string(hairobb_result r)
+{
+    switch (r) {
+    case HAIROBB_OK: return "ok";
+    case HAIROBB_ERROR_INVALID_ARGUMENT: return "invalid argument (NULL pointer, zero segments or bad option)";
+    case HAIROBB_ERROR_INDEX_OUT_OF_RANGE: return "segment index out of range (index + 3 >= vertex count)";
+    case HAIROBB_ERROR_INVALID_GEOMETRY: return "invalid geometry (NaN, infinite or huge coordinate, or negative radius)";
+    case HAIROBB_ERROR_OUT_OF_MEMORY: return "out of memory";
+    case HAIROBB_ERROR_TOO_LARGE: return "input too large (size overflow or more than 2^32-1 segments)";
+    }
+    return "unknown hairobb_result";
+}
+
+static hairobb_result hairobb__validate(const float *vertices, size_t vertex_count,
+                                        const uint32_t *indices, size_t segment_count)
+{
+    size_t i, k;
+    if (segment_count > 0xffffffffu || vertex_count > (size_t)-1 / (4 * sizeof(float)))
+        return HAIROBB_ERROR_TOO_LARGE;
+    for (i = 0; i < segment_count; ++i) {
+        if (vertex_count < 4 || indices[i] > vertex_count - 4) return HAIROBB_ERROR_INDEX_OUT_OF_RANGE;
+    }
+    for (i = 0; i < segment_count; ++i) {
+        const float *cp = vertices + 4 * (size_t)indices[i];
+        for (k = 0; k < 16; ++k) {
+            /* the negated test also rejects NaN */
+            if (!(fabsf(cp[k]) <= HAIROBB__MAX_COORD)) return HAIROBB_ERROR_INVALID_GEOMETRY;
+        }
+        for (k = 3; k < 16; k += 4) {
+            if (cp[k] < 0.0f) return HAIROBB_ERROR_INVALID_GEOMETRY;
+        }
+    }
+    return HAIROBB_OK;
+}
+
+/* Box of a segment in a rotated frame (rows of frame are the new axes).
+   The ribbon lies in the convex hull of the control points dilated by the
+   largest radius (r(u) is a convex combination of the 4 radii), so the box of
+   the rotated control points grown by that radius bounds it. */
+static void hairobb__segment_box(const float *cp, const float frame[9], float lower[3], float upper[3])
+{
+    int i, k;
+    float radius = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
+    hairobb__box_empty(lower, upper);
+    for (i = 0; i < 4; ++i) {
+        for (k = 0; k < 3; ++k) {
+            float x = hairobb__dot3(frame + 3 * k, cp + 4 * i);
+            lower[k] = hairobb__minf(lower[k], x);
+            upper[k] = hairobb__maxf(upper[k], x);
+        }
+    }
+    for (k = 0; k < 3; ++k) { lower[k] -= radius; upper[k] += radius; }
+    hairobb__pad_box(lower, upper);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Hair space                                                                */
+/* ------------------------------------------------------------------------ */
+typedef struct hairobb__builder {
+    const float *vertices;
+    const uint32_t *indices;
+    float *world_boxes;               /* 6 per segment: lower, upper */
+    uint32_t *ids;                    /* partitioned in place; becomes leaf_prims */
+    unsigned char *node_allocation, *nodes;
+    size_t node_bytes, node_capacity;
+    void *user;
+    hairobb_node_policy policy;
+    unsigned max_leaf, candidates;
+    hairobb_stats stats;
+    int out_of_memory;
+} hairobb__builder;
+
+static const float *hairobb__control_points(const hairobb__builder *b, uint32_t id)
+{
+    return b->vertices + 4 * (size_t)b->indices[id];
+}
+
+static void hairobb__prim_box(const hairobb__builder *b, uint32_t id, const float *frame,
+                              float lower[3], float upper[3])
+{
+    if (!frame) {
+        memcpy(lower, b->world_boxes + 6 * (size_t)id, 3 * sizeof(float));
+        memcpy(upper, b->world_boxes + 6 * (size_t)id + 3, 3 * sizeof(float));
+    } else {
+        hairobb__segment_box(hairobb__control_points(b, id), frame, lower, upper);
+    }
+}
+
+/* Rotation whose z axis is the main direction (first to last control point)
+   of segment id; 0 if the segment has no direction. */
+static int hairobb__segment_frame(const hairobb__builder *b, uint32_t id, float frame[9])
+{
+    const float *cp = hairobb__control_points(b, id);
+    float d[3];
+    float len;
+    d[0] = cp[12] - cp[0]; d[1] = cp[13] - cp[1]; d[2] = cp[14] - cp[2];
+    len = sqrtf(hairobb__dot3(d, d));
+    if (!(len > 0.0f) || !(len < FLT_MAX)) return 0;
+    d[0] /= len; d[1] /= len; d[2] /= len;
+    hairobb__frame_from_direction(d, frame);
+    return 1;
+}
+
+/* Picks, among the main directions of evenly spaced segments of the range
+   (and the world axes when allow_identity), the rotation with the smallest
+   summed surface area of the sampled segments' boxes. Deterministic. */
+static void hairobb__choose_hair_space(const hairobb__builder *b, size_t begin, size_t end,
+                                       int allow_identity, float best_frame[9])
+{
+    size_t count = end - begin, step = count > HAIROBB__SAMPLE ? count / HAIROBB__SAMPLE : 1;
+    unsigned c, candidates = b->candidates < count ? b->candidates : (unsigned)count;
+    float best_area = FLT_MAX;
+    hairobb__identity_frame(best_frame);
+    for (c = 0; c < candidates + (allow_identity ? 1u : 0u); ++c) {
+        float frame[9], area = 0.0f;
+        size_t i;
+        if (c == candidates) {
+            hairobb__identity_frame(frame);
+        } else {
+            size_t pick = begin + (count * (2 * c + 1)) / (2 * candidates);
+            if (!hairobb__segment_frame(b, b->ids[pick], frame)) continue;
+        }
+        for (i = begin; i < end && area < best_area; i += step) {
+            float lower[3], upper[3];
+            hairobb__prim_box(b, b->ids[i], frame, lower, upper);
+            area += hairobb__half_area(lower, upper);
+        }
+        if (area < best_area) { best_area = area; memcpy(best_frame, frame, sizeof frame); }
+    }
+}
+
+/* ------------------------------------------------------------------------ */
+/* Builder: binned SAH in world space and in hair space, 4-wide filling      */
+/* ------------------------------------------------------------------------ */
+typedef struct hairobb__split {
+    float cost;                 /* FLT_MAX: no split found */
+    int hair_space;             /* the split was made in frame, not world axes */
+    float frame[9];
+    int axis;
+    float bin_origin, bin_scale;
+    int last_left_bin;          /* bins 0..last_left_bin go left; -1: split at the median */
+    float area_left, area_right;
+    float parent_area;          /* world box of the range being split */
+} hairobb__split;
+
+static int hairobb__bin_of(float centroid, float origin, float scale)
+{
+    int bin = (int)((centroid - origin) * scale);
+    return bin < 0 ? 0 : bin >= HAIROBB__BINS ? HAIROBB__BINS - 1 : bin;
+}
+
+/* Best SAH object split of ids[begin, end) binned by centroid along the axes
+   of frame (NULL = world axes). Costs are SAH costs times the parent's area;
+   box_cost is that of testing the two new child boxes. */
+static void hairobb__bin_split(const hairobb__builder *b, size_t begin, size_t end,
+                               const float *frame, float box_cost, hairobb__split *best)
+{
+    float cmin[3], cmax[3];
+    size_t i;
+    int axis;
+    hairobb__box_empty(cmin, cmax);
+    for (i = begin; i < end; ++i) {
+        float lower[3], upper[3], c[3];
+        int k;
+        hairobb__prim_box(b, b->ids[i], frame, lower, upper);
+        for (k = 0; k < 3; ++k) c[k] = 0.5f * (lower[k] + upper[k]);
+        hairobb__box_grow(cmin, cmax, c, c);
+    }
+    for (axis = 0; axis < 3; ++axis) {
+        float bin_lower[HAIROBB__BINS][3], bin_upper[HAIROBB__BINS][3];
+        float right_area[HAIROBB__BINS];
+        size_t bin_count[HAIROBB__BINS], right_count[HAIROBB__BINS], left_count = 0;
+        float extent = cmax[axis] - cmin[axis], scale, lo[3], hi[3];
+        int bin;
+        if (!(extent > 0.0f)) continue;
+        scale = (float)HAIROBB__BINS * (1.0f - 1.0f / 1024.0f) / extent;
+        for (bin = 0; bin < HAIROBB__BINS; ++bin) {
+            hairobb__box_empty(bin_lower[bin], bin_upper[bin]);
+            bin_count[bin] = 0;
+        }
+        for (i = begin; i < end; ++i) {
+            float lower[3], upper[3];
+            hairobb__prim_box(b, b->ids[i], frame, lower, upper);
+            bin = hairobb__bin_of(0.5f * (lower[axis] + upper[axis]), cmin[axis], scale);
+            hairobb__box_grow(bin_lower[bin], bin_upper[bin], lower, upper);
+            bin_count[bin]++;
+        }
+        /* right-to-left sweep: box and count of bins [bin, BINS) */
+        hairobb__box_empty(lo, hi);
+        for (bin = HAIROBB__BINS - 1; bin > 0; --bin) {
+            hairobb__box_grow(lo, hi, bin_lower[bin], bin_upper[bin]);
+            right_count[bin] = bin_count[bin] + (bin + 1 < HAIROBB__BINS ? right_count[bin + 1] : 0);
+            right_area[bin] = right_count[bin] ? hairobb__half_area(lo, hi) : 0.0f;
+        }
+        hairobb__box_empty(lo, hi);
+        for (bin = 0; bin < HAIROBB__BINS - 1; ++bin) {
+            float cost, left_area;
+            hairobb__box_grow(lo, hi, bin_lower[bin], bin_upper[bin]);
+            left_count += bin_count[bin];
+            if (left_count == 0 || right_count[bin + 1] == 0) continue;
+            left_area = hairobb__half_area(lo, hi);
+            cost = box_cost + HAIROBB__COST_SEGMENT * (left_area * (float)left_count + right_area[bin + 1] * (float)right_count[bin + 1]);
+            if (cost < best->cost) {
+                best->cost = cost;
+                best->hair_space = frame != NULL;
+                if (frame) memcpy(best->frame, frame, sizeof best->frame);
+                best->axis = axis;
+                best->bin_origin = cmin[axis];
+                best->bin_scale = scale;
+                best->last_left_bin = bin;
+                best->area_left = left_area;
+                best->area_right = right_area[bin + 1];
+            }
+        }
+    }
+}
+
+static void hairobb__range_box(const hairobb__builder *b, size_t begin, size_t end, const float *frame,
+                               float lower[3], float upper[3])
+{
+    size_t i;
+    hairobb__box_empty(lower, upper);
+    for (i = begin; i < end; ++i) {
+        float lo[3], hi[3];
+        hairobb__prim_box(b, b->ids[i], frame, lo, hi);
+        hairobb__box_grow(lower, upper, lo, hi);
+    }
+}
+
+/* The cheapest split the policy allows; a median split when binning finds
+   none (all centroids equal) or below the SAH depth. */
+static void hairobb__find_split(const hairobb__builder *b, size_t begin, size_t end, unsigned depth,
+                                hairobb__split *best)
+{
+    float lower[3], upper[3], area;
+    hairobb__range_box(b, begin, end, NULL, lower, upper);
+    area = hairobb__half_area(lower, upper);
+    best->cost = FLT_MAX;
+    best->hair_space = 0;
+    best->last_left_bin = -1;
+    best->parent_area = area;
+    if (depth < HAIROBB__SAH_DEPTH) {
+        if (b->policy != HAIROBB_NODES_OBB_ONLY)
+            hairobb__bin_split(b, begin, end, NULL, 2.0f * HAIROBB__COST_AABB * area, best);
+        if (b->policy != HAIROBB_NODES_AABB_ONLY) {
+            float frame[9];
+            hairobb__choose_hair_space(b, begin, end, 0, frame);
+            hairobb__bin_split(b, begin, end, frame, 2.0f * HAIROBB__COST_OBB * area, best);
+        }
+    }
+    if (best->cost == FLT_MAX) {
+        size_t half = (end - begin) / 2;
+        hairobb__range_box(b, begin, begin + half, NULL, lower, upper);
+        best->area_left = hairobb__half_area(lower, upper);
+        hairobb__range_box(b, begin + half, end, NULL, lower, upper);
+        best->area_right = hairobb__half_area(lower, upper);
+    }
+}
+
+/* Reorders ids[begin, end) so the split's left side comes first; returns the
+   first right index. */
+static size_t hairobb__partition(hairobb__builder *b, size_t begin, size_t end, const hairobb__split *split)
+{
+    size_t left = begin, right = end;
+    if (split->last_left_bin < 0) return begin + (end - begin) / 2;
+    while (left < right) {
+        float lower[3], upper[3];
+        hairobb__prim_box(b, b->ids[left], split->hair_space ? split->frame : NULL, lower, upper);
+        if (hairobb__bin_of(0.5f * (lower[split->axis] + upper[split->axis]), split->bin_origin, split->bin_scale)
+            <= split->last_left_bin) {
+            ++left;
+        } else {
+            uint32_t t = b->ids[left];
+            b->ids[left] = b->ids[--right];
+            b->ids[right] = t;
+        }
+    }
+    HAIROBB_ASSERT(left > begin && left < end);
+    return left;
+}
+
+/* Node memory grows by doubling; offsets, not pointers, survive a move. */
+static size_t hairobb__alloc_node(hairobb__builder *b, size_t bytes)
+{
+    size_t offset = b->node_bytes;
+    if (b->out_of_memory) return 0;
+    if (offset + bytes > b->node_capacity) {
+        size_t capacity = b->node_capacity ? 2 * b->node_capacity : 4096;
+        unsigned char *allocation, *aligned;
+        while (capacity < offset + bytes) capacity *= 2;
+        allocation = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(capacity + 64, b->user));
+        if (!allocation) { b->out_of_memory = 1; return 0; }
+        aligned = allocation + ((64 - ((uintptr_t)allocation & 63)) & 63);
+        if (b->node_bytes) memcpy(aligned, b->nodes, b->node_bytes);
+        if (b->node_allocation) HAIROBB_FREE(b->node_allocation, b->user);
+        b->node_allocation = allocation;
+        b->nodes = aligned;
+        b->node_capacity = capacity;
+    }
+    b->node_bytes += bytes;
+    return offset;
+}
+
+typedef struct hairobb__child {
+    size_t begin, end;
+    float area;
+    int final_leaf;             /* SAH chose a leaf for it */
+} hairobb__child;
+
+static uint64_t hairobb__make_leaf(hairobb__builder *b, size_t begin, size_t end, unsigned depth)
+{
+    b->stats.leaves++;
+    b->stats.leaf_references += end - begin;
+    if (depth > b->stats.max_depth) b->stats.max_depth = depth;
+    return ((uint64_t)begin << 8) | ((uint64_t)(end - begin) << 4) | HAIROBB__REF_LEAF;
+}
+
+/* Writes the affine map of box [lower, upper] in frame onto the unit cube
+   into lane `lane` of an OBB node. */
+static void hairobb__store_obb(hairobb__obb_node *node, int lane, const float frame[9],
+                               const float lower[3], const float upper[3])
+{
+    int row, col;
+    for (row = 0; row < 3; ++row) {
+        /* a floor on the extent keeps the scale finite for flat boxes */
+        float extent = hairobb__maxf(upper[row] - lower[row], 1e-30f);
+        float scale = 1.0f / extent;
+        for (col = 0; col < 3; ++col) node->xfm[3 * row + col][lane] = frame[3 * row + col] * scale;
+        node->xfm[9 + row][lane] = -lower[row] * scale;
+    }
+}
+
+static uint64_t hairobb__build_range(hairobb__builder *b, size_t begin, size_t end, unsigned depth);
+
+/* SAH cost of a leaf, on the scale of hairobb__bin_split's costs */
+static float hairobb__leaf_cost(size_t count, float area) { return HAIROBB__COST_SEGMENT * (float)count * area; }
+
+/* Builds a 4-wide node over ids[begin, end): split the child with the largest
+   area until there are 4; the node is OBB where a hair-space split won. */
+static uint64_t hairobb__build_node(hairobb__builder *b, size_t begin, size_t end, unsigned depth,
+                                    const hairobb__split *first_split)
+{
+    hairobb__child children[4];
+    int count = 1, use_obb = b->policy == HAIROBB_NODES_OBB_ONLY, i;
+    size_t offset;
+    uint64_t refs[4];
+    hairobb__split split = *first_split;
+    children[0].begin = begin; children[0].end = end; children[0].area = FLT_MAX; children[0].final_leaf = 0;
+    for (;;) {
+        int pick = -1;
+        size_t middle;
+        for (i = 0; i < count; ++i) {
+            if (children[i].final_leaf || children[i].end - children[i].begin < 2) continue;
+            if (pick < 0 || children[i].area > children[pick].area) pick = i;
+        }
+        if (pick < 0 || count == 4) break;
+        if (count > 1) {
+            size_t n = children[pick].end - children[pick].begin;
+            hairobb__find_split(b, children[pick].begin, children[pick].end, depth + 1, &split);
+            if (n <= b->max_leaf && hairobb__leaf_cost(n, split.parent_area) <= split.cost) {
+                children[pick].final_leaf = 1;
+                continue;
+            }
+        }
+        middle = hairobb__partition(b, children[pick].begin, children[pick].end, &split);
+        if (split.hair_space) use_obb = 1;
+        children[count].begin = middle;
+        children[count].end = children[pick].end;
+        children[count].area = split.area_right;
+        children[count].final_leaf = 0;
+        children[pick].end = middle;
+        children[pick].area = split.area_left;
+        ++count;
+    }
+    if (b->policy == HAIROBB_NODES_AABB_ONLY) use_obb = 0;
+
+    offset = hairobb__alloc_node(b, use_obb ? sizeof(hairobb__obb_node) : sizeof(hairobb__aabb_node));
+    if (use_obb) b->stats.obb_nodes++; else b->stats.aabb_nodes++;
+    for (i = 0; i < count; ++i) {
+        if (children[i].final_leaf || children[i].end - children[i].begin == 1)
+            refs[i] = hairobb__make_leaf(b, children[i].begin, children[i].end, depth + 1);
+        else
+            refs[i] = hairobb__build_range(b, children[i].begin, children[i].end, depth + 1);
+    }
+    if (b->out_of_memory) return HAIROBB__REF_EMPTY;
+
+    if (use_obb) {
+        hairobb__obb_node *node = HAIROBB__CAST(hairobb__obb_node *, (void *)(b->nodes + offset));
+        for (i = 0; i < 4; ++i) {
+            float frame[9], lower[3], upper[3];
+            if (i < count) {
+                hairobb__choose_hair_space(b, children[i].begin, children[i].end, 1, frame);
+                hairobb__range_box(b, children[i].begin, children[i].end, frame, lower, upper);
+            } else {
+                /* an empty child maps everything to (2,2,2): never inside the unit cube */
+                memset(frame, 0, sizeof frame);
+                lower[0] = lower[1] = lower[2] = -2.0f;
+                upper[0] = upper[1] = upper[2] = -1.0f;
+            }
+            hairobb__store_obb(node, i, frame, lower, upper);
+            node->child[i] = i < count ? refs[i] : HAIROBB__REF_EMPTY;
+        }
+        return (uint64_t)offset | HAIROBB__REF_OBB;
+    } else {
+        hairobb__aabb_node *node = HAIROBB__CAST(hairobb__aabb_node *, (void *)(b->nodes + offset));
+        for (i = 0; i < 4; ++i) {
+            float lower[3], upper[3];
+            int k;
+            if (i < count) hairobb__range_box(b, children[i].begin, children[i].end, NULL, lower, upper);
+            else { for (k = 0; k < 3; ++k) { lower[k] = INFINITY; upper[k] = -INFINITY; } }
+            for (k = 0; k < 3; ++k) { node->lower[k][i] = lower[k]; node->upper[k][i] = upper[k]; }
+            node->child[i] = i < count ? refs[i] : HAIROBB__REF_EMPTY;
+        }
+        return (uint64_t)offset | HAIROBB__REF_AABB;
+    }
+}
+
+static uint64_t hairobb__build_range(hairobb__builder *b, size_t begin, size_t end, unsigned depth)
+{
+    hairobb__split split;
+    size_t n = end - begin;
+    if (n == 1) return hairobb__make_leaf(b, begin, end, depth);
+    hairobb__find_split(b, begin, end, depth, &split);
+    if (n <= b->max_leaf && hairobb__leaf_cost(n, split.parent_area) <= split.cost)
+        return hairobb__make_leaf(b, begin, end, depth);
+    return hairobb__build_node(b, begin, end, depth, &split);
+}
+
+static void hairobb__setup_pieces(hairobb_bvh *bvh, int pieces)
+{
+    int chunk, lane, end;
+    bvh->pieces = pieces;
+    bvh->piece_chunks = (pieces + 7) / 8;
+    for (chunk = 0; chunk < 2; ++chunk) {
+        int first = 8 * chunk;
+        int real = pieces - first < 0 ? 0 : pieces - first > 8 ? 8 : pieces - first;
+        bvh->chunk_valid[chunk] = (1u << real) - 1u;
+        for (lane = 0; lane < 8; ++lane) {
+            /* lanes past the last piece repeat it; they are masked out */
+            int k = first + lane < pieces ? first + lane : pieces - 1;
+            for (end = 0; end < 2; ++end) {
+                float u = (float)(k + end) / (float)pieces, s = 1.0f - u;
+                bvh->piece_weights[chunk][end][0][lane] = s * s * s;
+                bvh->piece_weights[chunk][end][1][lane] = 3.0f * u * s * s;
+                bvh->piece_weights[chunk][end][2][lane] = 3.0f * u * u * s;
+                bvh->piece_weights[chunk][end][3][lane] = u * u * u;
+            }
+        }
+    }
+}
+
+HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_count,
+                             const uint32_t *indices, size_t segment_count,
+                             const hairobb_build_options *options, hairobb_bvh **out)
+{
+    hairobb_build_options opt;
+    hairobb__builder b;
+    hairobb_bvh *bvh;
+    hairobb_result result;
+    size_t i;
+    float identity[9];
+
+    if (out) *out = NULL;
+    if (!out || !vertices || !indices || segment_count == 0) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    if (options) opt = *options; else memset(&opt, 0, sizeof opt);
+    if (opt.max_leaf_size == 0) opt.max_leaf_size = 4;
+    if (opt.hair_space_candidates == 0) opt.hair_space_candidates = 4;
+    if (opt.curve_pieces == 0) opt.curve_pieces = 8;
+    if ((unsigned)opt.nodes > HAIROBB_NODES_OBB_ONLY || (unsigned)opt.precision > HAIROBB_PRECISION_PIECES ||
+        opt.max_leaf_size > HAIROBB__MAX_LEAF || opt.hair_space_candidates > HAIROBB__MAX_CANDIDATES ||
+        opt.curve_pieces > HAIROBB__MAX_PIECES)
+        return HAIROBB_ERROR_INVALID_ARGUMENT;
+    result = hairobb__validate(vertices, vertex_count, indices, segment_count);
+    if (result != HAIROBB_OK) return result;
+    if (segment_count > (size_t)-1 / (6 * sizeof(float))) return HAIROBB_ERROR_TOO_LARGE;
+
+    memset(&b, 0, sizeof b);
+    b.vertices = vertices;
+    b.indices = indices;
+    b.user = opt.allocator_user;
+    b.policy = opt.nodes;
+    b.max_leaf = opt.max_leaf_size;
+    b.candidates = opt.hair_space_candidates;
+    bvh = HAIROBB__CAST(hairobb_bvh *, HAIROBB_MALLOC(sizeof *bvh, b.user));
+    b.world_boxes = HAIROBB__CAST(float *, HAIROBB_MALLOC(6 * sizeof(float) * segment_count, b.user));
+    b.ids = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(sizeof(uint32_t) * segment_count, b.user));
+    if (!bvh || !b.world_boxes || !b.ids) goto out_of_memory;
+    memset(bvh, 0, sizeof *bvh);
+
+    hairobb__identity_frame(identity);
+    hairobb__box_empty(bvh->lower, bvh->upper);
+    for (i = 0; i < segment_count; ++i) {
+        float *box = b.world_boxes + 6 * i;
+        hairobb__segment_box(vertices + 4 * (size_t)indices[i], identity, box, box + 3);
+        hairobb__box_grow(bvh->lower, bvh->upper, box, box + 3);
+        b.ids[i] = (uint32_t)i;
+    }
+    bvh->root = hairobb__build_range(&b, 0, segment_count, 0);
+    if (b.out_of_memory) goto out_of_memory;
+
+    /* shrink the node memory to its exact size: memory_bytes reports what stays */
+    if (b.node_bytes) {
+        unsigned char *allocation = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(b.node_bytes + 64, b.user));
+        if (!allocation) goto out_of_memory;
+        bvh->node_allocation = allocation;
+        bvh->nodes = allocation + ((64 - ((uintptr_t)allocation & 63)) & 63);
+        memcpy(bvh->nodes, b.nodes, b.node_bytes);
+        bvh->node_bytes = b.node_bytes;
+        HAIROBB_FREE(b.node_allocation, b.user);
+    }
+    HAIROBB_FREE(b.world_boxes, b.user);
+    bvh->vertices = vertices;
+    bvh->indices = indices;
+    bvh->vertex_count = vertex_count;
+    bvh->segment_count = segment_count;
+    bvh->allocator_user = b.user;
+    bvh->leaf_prims = b.ids;
+    bvh->leaf_prim_count = segment_count;
+    bvh->precision = opt.precision;
+    hairobb__setup_pieces(bvh, (int)opt.curve_pieces);
+    bvh->stats = b.stats;
+    bvh->stats.node_bytes = b.node_bytes;
+    bvh->stats.leaf_bytes = sizeof(uint32_t) * segment_count;
+    *out = bvh;
+    return HAIROBB_OK;
+
+out_of_memory:
+    if (b.node_allocation) HAIROBB_FREE(b.node_allocation, b.user);
+    if (b.world_boxes) HAIROBB_FREE(b.world_boxes, b.user);
+    if (b.ids) HAIROBB_FREE(b.ids, b.user);
+    if (bvh) HAIROBB_FREE(bvh, b.user);
+    return HAIROBB_ERROR_OUT_OF_MEMORY;
+}
+
+HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh)
+{
+    void *user;
+    if (!bvh) return;
+    user = bvh->allocator_user;
+    if (bvh->node_allocation) HAIROBB_FREE(bvh->node_allocation, user);
+    if (bvh->leaf_prims) HAIROBB_FREE(bvh->leaf_prims, user);
+    HAIROBB_FREE(bvh, user);
+}
+
+HAIROBB_DEF size_t hairobb_memory_bytes(const hairobb_bvh *bvh)
+{
+    if (!bvh) return 0;
+    return sizeof *bvh + (bvh->node_allocation ? bvh->node_bytes + 64 : 0) + sizeof(uint32_t) * bvh->leaf_prim_count;
+}
+
+HAIROBB_DEF void hairobb_get_stats(const hairobb_bvh *bvh, hairobb_stats *stats)
+{
+    if (!stats) return;
+    if (!bvh) { memset(stats, 0, sizeof *stats); return; }
+    *stats = bvh->stats;
+}
+
+HAIROBB_DEF void hairobb_bounds(const hairobb_bvh *bvh, float lower[3], float upper[3])
+{
+    memcpy(lower, bvh->lower, sizeof bvh->lower);
+    memcpy(upper, bvh->upper, sizeof bvh->upper);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Traversal                                                                 */
+/* ------------------------------------------------------------------------ */
+/* Everything one ray needs, computed once per ray. */
+typedef struct hairobb__ray_state {
+    float org[3], dir[3];
+    float tnear, tfar;          /* tfar shrinks to the nearest hit so far */
+    float rdir[3];              /* 1/dir, finite */
+    int near_is_upper[3];       /* rdir < 0: enter through the upper plane */
+    float frame[9];             /* rows x, y, z of ray space; z = dir/|dir| */
+    float dir_length, inv_dir_length;
+    uint32_t hit_prim;
+    float hit_u;
+} hairobb__ray_state;
+
+#define HAIROBB__TINY_DIR 1e-18f
+/* Slab distances carry rounding from the ray transform; widening the far end
+   by a few ulps keeps the test conservative (after Ize 2013). */
+#define HAIROBB__FAR_SCALE (1.0f + 4.0f * FLT_EPSILON)
+
+static int hairobb__ray_setup(hairobb__ray_state *rs, const hairobb_ray *ray)
+{
+    int k;
+    float unit[3];
+    for (k = 0; k < 3; ++k) {
+        float d = fabsf(ray->dir[k]) < HAIROBB__TINY_DIR ? (signbit(ray->dir[k]) ? -HAIROBB__TINY_DIR : HAIROBB__TINY_DIR) : ray->dir[k];
+        rs->org[k] = ray->org[k];
+        rs->dir[k] = ray->dir[k];
+        rs->rdir[k] = 1.0f / d;
+        rs->near_is_upper[k] = rs->rdir[k] < 0.0f;
+    }
+    rs->tnear = ray->tnear;
+    rs->tfar = ray->tfar;
+    rs->hit_prim = HAIROBB_INVALID_ID;
+    rs->hit_u = 0.0f;
+    rs->dir_length = sqrtf(hairobb__dot3(ray->dir, ray->dir));
+    if (!(rs->dir_length > 0.0f) || !(rs->dir_length < INFINITY) || !(rs->tnear <= rs->tfar)) return 0;
+    rs->inv_dir_length = 1.0f / rs->dir_length;
+    for (k = 0; k < 3; ++k) unit[k] = ray->dir[k] * rs->inv_dir_length;
+    hairobb__frame_from_direction(unit, rs->frame);
+    return 1;
+}
+
+static hairobb__v4 hairobb__far_scale(hairobb__v4 tfar)
+{
+    return hairobb__v4_mul(tfar, hairobb__v4_set1(HAIROBB__FAR_SCALE));
+}
+
+static int hairobb__intersect_aabb_node(const hairobb__aabb_node *node, const hairobb__ray_state *rs, float dist[4])
+{
+    hairobb__v4 tn = hairobb__v4_set1(rs->tnear), tf = hairobb__v4_set1(rs->tfar);
+    int k;
+    for (k = 0; k < 3; ++k) {
+        hairobb__v4 o = hairobb__v4_set1(rs->org[k]), r = hairobb__v4_set1(rs->rdir[k]);
+        const float *near_plane = rs->near_is_upper[k] ? node->upper[k] : node->lower[k];
+        const float *far_plane = rs->near_is_upper[k] ? node->lower[k] : node->upper[k];
+        tn = hairobb__v4_max(hairobb__v4_mul(hairobb__v4_sub(hairobb__v4_load(near_plane), o), r), tn);
+        tf = hairobb__v4_min(hairobb__v4_mul(hairobb__v4_sub(hairobb__v4_load(far_plane), o), r), tf);
+    }
+    hairobb__v4_store(dist, tn);
+    return hairobb__v4_le_bits(tn, hairobb__far_scale(tf));
+}
+
+static int hairobb__intersect_obb_node(const hairobb__obb_node *node, const hairobb__ray_state *rs, float dist[4])
+{
+    hairobb__v4 tn = hairobb__v4_set1(rs->tnear), tf = hairobb__v4_set1(rs->tfar);
+    hairobb__v4 one = hairobb__v4_set1(1.0f);
+    hairobb__v4 ox = hairobb__v4_set1(rs->org[0]), oy = hairobb__v4_set1(rs->org[1]), oz = hairobb__v4_set1(rs->org[2]);
+    hairobb__v4 dx = hairobb__v4_set1(rs->dir[0]), dy = hairobb__v4_set1(rs->dir[1]), dz = hairobb__v4_set1(rs->dir[2]);
+    int row;
+    for (row = 0; row < 3; ++row) {
+        hairobb__v4 m0 = hairobb__v4_load(node->xfm[3 * row]), m1 = hairobb__v4_load(node->xfm[3 * row + 1]);
+        hairobb__v4 m2 = hairobb__v4_load(node->xfm[3 * row + 2]), m3 = hairobb__v4_load(node->xfm[9 + row]);
+        hairobb__v4 o = hairobb__v4_add(hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(m0, ox), hairobb__v4_mul(m1, oy)), hairobb__v4_mul(m2, oz)), m3);
+        hairobb__v4 d = hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(m0, dx), hairobb__v4_mul(m1, dy)), hairobb__v4_mul(m2, dz));
+        hairobb__v4 r = hairobb__v4_div(one, hairobb__v4_nonzero(d, HAIROBB__TINY_DIR));
+        hairobb__v4 t0 = hairobb__v4_mul(hairobb__v4_sub(hairobb__v4_set1(0.0f), o), r);
+        hairobb__v4 t1 = hairobb__v4_mul(hairobb__v4_sub(one, o), r);
+        tn = hairobb__v4_max(hairobb__v4_min(t0, t1), tn);
+        tf = hairobb__v4_min(hairobb__v4_max(t0, t1), tf);
+    }
+    hairobb__v4_store(dist, tn);
+    return hairobb__v4_le_bits(tn, hairobb__far_scale(tf));
+}
+
+static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint64_t ref, int any_hit);
+
+/* Nearest-first 4-wide traversal; any_hit stops at the first hit. */
+static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int any_hit)
+{
+    uint64_t stack_ref[HAIROBB__STACK];
+    float stack_dist[HAIROBB__STACK];
+    int sp = 0, found = 0;
+    stack_ref[sp] = bvh->root;
+    stack_dist[sp] = rs->tnear;
+    ++sp;
+    while (sp > 0) {
+        uint64_t ref;
+        --sp;
+        ref = stack_ref[sp];
+        if (stack_dist[sp] > rs->tfar) continue;
+        while (HAIROBB__REF_TYPE(ref) <= HAIROBB__REF_OBB) {
+            const void *node = bvh->nodes + (ref & ~(uint64_t)15);
+            const uint64_t *child;
+            float dist[4];
+            int bits, i, hits = 0;
+            uint64_t hit_ref[4];
+            float hit_dist[4];
+            if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_AABB) {
+                bits = hairobb__intersect_aabb_node(HAIROBB__CAST(const hairobb__aabb_node *, node), rs, dist);
+                child = HAIROBB__CAST(const hairobb__aabb_node *, node)->child;
+            } else {
+                bits = hairobb__intersect_obb_node(HAIROBB__CAST(const hairobb__obb_node *, node), rs, dist);
+                child = HAIROBB__CAST(const hairobb__obb_node *, node)->child;
+            }
+            if (!bits) { ref = HAIROBB__REF_EMPTY; break; }
+            /* insertion sort of the hit children, nearest last */
+            while (bits) {
+                int j = hairobb__lowest_bit((unsigned)bits);
+                bits &= bits - 1;
+                for (i = hits; i > 0 && hit_dist[i - 1] < dist[j]; --i) {
+                    hit_ref[i] = hit_ref[i - 1];
+                    hit_dist[i] = hit_dist[i - 1];
+                }
+                hit_ref[i] = child[j];
+                hit_dist[i] = dist[j];
+                ++hits;
+            }
+            for (i = 0; i < hits - 1; ++i) {
+                stack_ref[sp] = hit_ref[i];
+                stack_dist[sp] = hit_dist[i];
+                ++sp;
+            }
+            ref = hit_ref[hits - 1];
+        }
+        if (HAIROBB__REF_TYPE(ref) != HAIROBB__REF_LEAF) continue;
+        if (hairobb__intersect_leaf(bvh, rs, ref, any_hit)) {
+            found = 1;
+            if (any_hit) return 1;
+        }
+    }
+    return found;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Ray / curve intersection                                                  */
+/* ------------------------------------------------------------------------ */
+/* A segment's control points in ray space: x, y across the ray, z along it. */
+typedef struct hairobb__ray_curve {
+    float x[4], y[4], z[4], r[4];
+} hairobb__ray_curve;
+
+static void hairobb__to_ray_space(const hairobb__ray_state *rs, const float *cp, hairobb__ray_curve *c)
+{
+    int i;
+    for (i = 0; i < 4; ++i) {
+        float q[3];
+        q[0] = cp[4 * i] - rs->org[0];
+        q[1] = cp[4 * i + 1] - rs->org[1];
+        q[2] = cp[4 * i + 2] - rs->org[2];
+        c->x[i] = hairobb__dot3(rs->frame, q);
+        c->y[i] = hairobb__dot3(rs->frame + 3, q);
+        c->z[i] = hairobb__dot3(rs->frame + 6, q);
+        c->r[i] = cp[4 * i + 3];
+    }
+}
+
+/* f(u) = dot(P2, P2') vanishes where the ribbon faces the ray; f'(u) too. */
+static float hairobb__ribbon_f(const hairobb__ray_curve *c, float u, float *derivative)
+{
+    float dx, dy, ddx, ddy;
+    float x = hairobb__bezier(c->x, u, &dx, &ddx);
+    float y = hairobb__bezier(c->y, u, &dy, &ddy);
+    if (derivative) *derivative = dx * dx + dy * dy + x * ddx + y * ddy;
+    return x * dx + y * dy;
+}
+
+/* Accepts u if the ribbon there covers the ray axis and t is nearer. */
+static int hairobb__try_hit(hairobb__ray_state *rs, const hairobb__ray_curve *c, uint32_t prim, float u)
+{
+    float x = hairobb__bezier(c->x, u, NULL, NULL), y = hairobb__bezier(c->y, u, NULL, NULL);
+    float r = hairobb__maxf(hairobb__bezier(c->r, u, NULL, NULL), 0.0f);
+    float t = hairobb__bezier(c->z, u, NULL, NULL) * rs->inv_dir_length;
+    if (!(x * x + y * y <= r * r) || !(t >= rs->tnear) || !(t <= rs->tfar)) return 0;
+    rs->tfar = t;
+    rs->hit_prim = prim;
+    rs->hit_u = u;
+    return 1;
+}
+
+/* Root of f in [lo, hi] where f changes sign: Newton steps, bisection when a
+   step leaves the bracket. */
+static float hairobb__solve_bracketed(const hairobb__ray_curve *c, float lo, float hi, float f_lo, float f_hi)
+{
+    float u = f_lo == f_hi ? 0.5f * (lo + hi) : lo + (hi - lo) * (f_lo / (f_lo - f_hi));
+    int iteration;
+    if (!(u >= lo && u <= hi)) u = 0.5f * (lo + hi);
+    for (iteration = 0; iteration < 24; ++iteration) {
+        float derivative, f = hairobb__ribbon_f(c, u, &derivative), next;
+        if (f == 0.0f) break;
+        if ((f < 0.0f) == (f_lo < 0.0f)) { lo = u; f_lo = f; } else { hi = u; }
+        next = u - f / derivative;
+        if (!(next > lo && next < hi)) next = 0.5f * (lo + hi);
+        if (fabsf(next - u) <= 1e-7f) { u = next; break; }
+        u = next;
+    }
+    return u;
+}
+
+/* All roots of f in piece [a, b] (at most two are looked for: a sign change,
+   or a dip through zero around an extremum of f), each tried as a hit. */
+static int hairobb__refine_piece(hairobb__ray_state *rs, const hairobb__ray_curve *c, uint32_t prim, float a, float b)
+{
+    float fa_derivative, fb_derivative;
+    float fa = hairobb__ribbon_f(c, a, &fa_derivative), fb = hairobb__ribbon_f(c, b, &fb_derivative);
+    int found = 0, iteration;
+    float lo, hi, middle, f_middle;
+    if ((fa <= 0.0f && fb >= 0.0f) || (fa >= 0.0f && fb <= 0.0f))
+        return hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, a, b, fa, fb));
+    /* no sign change: two roots hide only around an extremum of f, where f' changes sign */
+    if ((fa_derivative < 0.0f) == (fb_derivative < 0.0f)) return 0;
+    lo = a; hi = b;
+    for (iteration = 0; iteration < 20; ++iteration) {
+        float derivative;
+        middle = 0.5f * (lo + hi);
+        hairobb__ribbon_f(c, middle, &derivative);
+        if ((derivative < 0.0f) == (fa_derivative < 0.0f)) lo = middle; else hi = middle;
+    }
+    middle = 0.5f * (lo + hi);
+    f_middle = hairobb__ribbon_f(c, middle, NULL);
+    if ((f_middle < 0.0f) == (fa < 0.0f) && f_middle != 0.0f) return 0;
+    found |= hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, a, middle, fa, f_middle));
+    found |= hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, middle, b, f_middle, fb));
+    return found;
+}
+
+/* The linear piece alone (HAIROBB_PRECISION_PIECES): hit where the closest
+   point of the chord to the ray axis lies within the interpolated radius. */
+static int hairobb__piece_hit(hairobb__ray_state *rs, const hairobb__ray_curve *c, uint32_t prim,
+                              float a, float b, float s)
+{
+    float xa = hairobb__bezier(c->x, a, NULL, NULL), xb = hairobb__bezier(c->x, b, NULL, NULL);
+    float ya = hairobb__bezier(c->y, a, NULL, NULL), yb = hairobb__bezier(c->y, b, NULL, NULL);
+    float za = hairobb__bezier(c->z, a, NULL, NULL), zb = hairobb__bezier(c->z, b, NULL, NULL);
+    float ra = hairobb__bezier(c->r, a, NULL, NULL), rb = hairobb__bezier(c->r, b, NULL, NULL);
+    float x = xa + s * (xb - xa), y = ya + s * (yb - ya), r = ra + s * (rb - ra);
+    float t = (za + s * (zb - za)) * rs->inv_dir_length;
+    if (!(x * x + y * y <= r * r) || !(t >= rs->tnear) || !(t <= rs->tfar)) return 0;
+    rs->tfar = t;
+    rs->hit_prim = prim;
+    rs->hit_u = a + s * (b - a);
+    return 1;
+}
+
+static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint32_t prim, int any_hit)
+{
+    hairobb__ray_curve c;
+    float max_r, min_x, max_x, min_y, max_y, min_z, max_z, bend, bend_r, pad, magnitude;
+    int i, chunk, found = 0;
+    hairobb__to_ray_space(rs, bvh->vertices + 4 * (size_t)bvh->indices[prim], &c);
+
+    /* cull with the control polygon: the ribbon lies in its hull dilated by max r */
+    max_r = hairobb__maxf(hairobb__maxf(c.r[0], c.r[1]), hairobb__maxf(c.r[2], c.r[3]));
+    min_x = max_x = c.x[0]; min_y = max_y = c.y[0]; min_z = max_z = c.z[0];
+    for (i = 1; i < 4; ++i) {
+        min_x = hairobb__minf(min_x, c.x[i]); max_x = hairobb__maxf(max_x, c.x[i]);
+        min_y = hairobb__minf(min_y, c.y[i]); max_y = hairobb__maxf(max_y, c.y[i]);
+        min_z = hairobb__minf(min_z, c.z[i]); max_z = hairobb__maxf(max_z, c.z[i]);
+    }
+    if (min_x > max_r || max_x < -max_r || min_y > max_r || max_y < -max_r) return 0;
+    if (max_z < rs->tnear * rs->dir_length || min_z > rs->tfar * rs->dir_length) return 0;
+
+    /* A piece of parameter length h strays from its chord by at most
+       h^2/8 max|P''| and |P''| <= 6 max|second difference|: widen the chord
+       test by that (and the same for r) so no root of the ribbon is missed;
+       plus rounding of the evaluated points. */
+    bend = 0.0f; bend_r = 0.0f;
+    for (i = 0; i < 2; ++i) {
+        float ddx = c.x[i] - 2.0f * c.x[i + 1] + c.x[i + 2], ddy = c.y[i] - 2.0f * c.y[i + 1] + c.y[i + 2];
+        bend = hairobb__maxf(bend, sqrtf(ddx * ddx + ddy * ddy));
+        bend_r = hairobb__maxf(bend_r, fabsf(c.r[i] - 2.0f * c.r[i + 1] + c.r[i + 2]));
+    }
+    magnitude = hairobb__maxf(hairobb__maxf(fabsf(min_x), fabsf(max_x)), hairobb__maxf(fabsf(min_y), fabsf(max_y)));
+    pad = (bend + bend_r) * (0.75f / (float)(bvh->pieces * bvh->pieces)) + magnitude * (8.0f * FLT_EPSILON);
+    if (bvh->precision == HAIROBB_PRECISION_PIECES) pad = 0.0f;
+
+    for (chunk = 0; chunk < bvh->piece_chunks; ++chunk) {
+        const float (*w)[4][8] = bvh->piece_weights[chunk];
+        hairobb__v8 end_x[2], end_y[2], end_r[2];
+        hairobb__v8 dx, dy, len2, s, px, py, reach;
+        unsigned bits;
+        float s_lanes[8];
+        int e;
+        for (e = 0; e < 2; ++e) {
+            hairobb__v8 w0 = hairobb__v8_load(w[e][0]), w1 = hairobb__v8_load(w[e][1]);
+            hairobb__v8 w2 = hairobb__v8_load(w[e][2]), w3 = hairobb__v8_load(w[e][3]);
+#define HAIROBB__EVAL(v) hairobb__v8_add(hairobb__v8_add(hairobb__v8_add(hairobb__v8_mul(w0, hairobb__v8_set1(v[0])), \
+        hairobb__v8_mul(w1, hairobb__v8_set1(v[1]))), hairobb__v8_mul(w2, hairobb__v8_set1(v[2]))), hairobb__v8_mul(w3, hairobb__v8_set1(v[3])))
+            end_x[e] = HAIROBB__EVAL(c.x);
+            end_y[e] = HAIROBB__EVAL(c.y);
+            end_r[e] = HAIROBB__EVAL(c.r);
+#undef HAIROBB__EVAL
+        }
+        /* closest point of each chord to the ray axis (Nakamaru and Ohno) */
+        dx = hairobb__v8_sub(end_x[1], end_x[0]);
+        dy = hairobb__v8_sub(end_y[1], end_y[0]);
+        len2 = hairobb__v8_max(hairobb__v8_add(hairobb__v8_mul(dx, dx), hairobb__v8_mul(dy, dy)), hairobb__v8_set1(FLT_MIN));
+        s = hairobb__v8_div(hairobb__v8_sub(hairobb__v8_set1(0.0f), hairobb__v8_add(hairobb__v8_mul(end_x[0], dx), hairobb__v8_mul(end_y[0], dy))), len2);
+        s = hairobb__v8_max(hairobb__v8_min(s, hairobb__v8_set1(1.0f)), hairobb__v8_set1(0.0f));
+        px = hairobb__v8_add(end_x[0], hairobb__v8_mul(s, dx));
+        py = hairobb__v8_add(end_y[0], hairobb__v8_mul(s, dy));
+        if (bvh->precision == HAIROBB_PRECISION_PIECES)
+            reach = hairobb__v8_add(end_r[0], hairobb__v8_mul(s, hairobb__v8_sub(end_r[1], end_r[0])));
+        else
+            reach = hairobb__v8_add(hairobb__v8_max(end_r[0], end_r[1]), hairobb__v8_set1(pad));
+        bits = (unsigned)hairobb__v8_le_bits(hairobb__v8_add(hairobb__v8_mul(px, px), hairobb__v8_mul(py, py)),
+                                             hairobb__v8_mul(reach, reach)) & bvh->chunk_valid[chunk];
+        if (bits && bvh->precision == HAIROBB_PRECISION_PIECES) hairobb__v8_store(s_lanes, s);
+        while (bits) {
+            int lane = hairobb__lowest_bit(bits), k = 8 * chunk + lane;
+            float a = (float)k / (float)bvh->pieces, b = (float)(k + 1) / (float)bvh->pieces;
+            bits &= bits - 1;
+            if (bvh->precision == HAIROBB_PRECISION_PIECES)
+                found |= hairobb__piece_hit(rs, &c, prim, a, b, s_lanes[lane]);
+            else
+                found |= hairobb__refine_piece(rs, &c, prim, a, b);
+            if (found && any_hit) return 1;
+        }
+    }
+    return found;
+}
+
+static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint64_t ref, int any_hit)
+{
+    size_t first = (size_t)(ref >> 8), count = (size_t)((ref >> 4) & 15u), i;
+    int found = 0;
+    for (i = 0; i < count; ++i) {
+        if (hairobb__intersect_segment(bvh, rs, bvh->leaf_prims[first + i], any_hit)) {
+            found = 1;
+            if (any_hit) return 1;
+        }
+    }
+    return found;
+}
+
+/* Hit attributes, computed once for the final hit only. */
+static void hairobb__fill_hit(const hairobb_bvh *bvh, const hairobb__ray_state *rs, hairobb_hit *hit)
+{
+    const float *cp = bvh->vertices + 4 * (size_t)bvh->indices[rs->hit_prim];
+    hairobb__ray_curve c;
+    float u = rs->hit_u, world[4], tangent_xy[2], x, y, r, tlen2, along, n[3], nlen;
+    const float *unit_dir = rs->frame + 6;
+    int k, i;
+    hairobb__to_ray_space(rs, cp, &c);
+    for (k = 0; k < 3; ++k) {
+        for (i = 0; i < 4; ++i) world[i] = cp[4 * i + k];
+        hairobb__bezier(world, u, &hit->tangent[k], NULL);
+    }
+    x = hairobb__bezier(c.x, u, &tangent_xy[0], NULL);
+    y = hairobb__bezier(c.y, u, &tangent_xy[1], NULL);
+    r = hairobb__bezier(c.r, u, NULL, NULL);
+    tlen2 = tangent_xy[0] * tangent_xy[0] + tangent_xy[1] * tangent_xy[1];
+    hit->v = 0.0f;
+    if (r > 0.0f && tlen2 > 0.0f) {
+        hit->v = (tangent_xy[1] * x - tangent_xy[0] * y) / (sqrtf(tlen2) * r);
+        hit->v = hairobb__maxf(-1.0f, hairobb__minf(1.0f, hit->v));
+    }
+    /* the ribbon's normal: -dir without its component along the tangent */
+    along = hairobb__dot3(unit_dir, hit->tangent);
+    tlen2 = hairobb__dot3(hit->tangent, hit->tangent);
+    for (k = 0; k < 3; ++k) n[k] = -unit_dir[k] + (tlen2 > 0.0f ? along * hit->tangent[k] / tlen2 : 0.0f);
+    nlen = sqrtf(hairobb__dot3(n, n));
+    for (k = 0; k < 3; ++k) hit->Ng[k] = nlen > 0.0f ? n[k] / nlen : -unit_dir[k];
+    hit->t = rs->tfar;
+    hit->u = u;
+    hit->prim_id = rs->hit_prim;
+}
+
+HAIROBB_DEF int hairobb_intersect1(const hairobb_bvh *bvh, const hairobb_ray *ray, hairobb_hit *hit)
+{
+    hairobb__ray_state rs;
+    if (!hit) return 0;
+    hit->prim_id = HAIROBB_INVALID_ID;
+    if (!bvh || !ray || !hairobb__ray_setup(&rs, ray)) return 0;
+    if (!hairobb__traverse(bvh, &rs, 0)) return 0;
+    hairobb__fill_hit(bvh, &rs, hit);
+    return 1;
+}
+
+HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray)
+{
+    hairobb__ray_state rs;
+    if (!bvh || !ray || !hairobb__ray_setup(&rs, ray)) return 0;
+    return hairobb__traverse(bvh, &rs, 1);
+}
+
+#endif /* HAIROBB_IMPLEMENTATION_DONE */
+#endif /* HAIROBB_IMPLEMENTATION */
+
+/*
+------------------------------------------------------------------------------
+This software is available under 2 licenses -- choose whichever you prefer.
+------------------------------------------------------------------------------
+ALTERNATIVE A - MIT License
+Copyright (c) 2026 the hairobb authors
+Permission is hereby granted, free of charge, to any person obtaining a copy of
+this software and associated documentation files (the "Software"), to deal in
+the Software without restriction, including without limitation the rights to
+use, copy, modify, merge, publish, distribute, sublicense, and/or sell copies
+of the Software, and to permit persons to whom the Software is furnished to do
+so, subject to the following conditions:
+The above copyright notice and this permission notice shall be included in all
+copies or substantial portions of the Software.
+THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND, EXPRESS OR
+IMPLIED, INCLUDING BUT NOT LIMITED TO THE WARRANTIES OF MERCHANTABILITY,
+FITNESS FOR A PARTICULAR PURPOSE AND NONINFRINGEMENT. IN NO EVENT SHALL THE
+AUTHORS OR COPYRIGHT HOLDERS BE LIABLE FOR ANY CLAIM, DAMAGES OR OTHER
+LIABILITY, WHETHER IN AN ACTION OF CONTRACT, TORT OR OTHERWISE, ARISING FROM,
+OUT OF OR IN CONNECTION WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE
+SOFTWARE.
+------------------------------------------------------------------------------
+ALTERNATIVE B - Public Domain (www.unlicense.org)
+This is free and unencumbered software released into the public domain.
+Anyone is free to copy, modify, publish, use, compile, sell, or distribute this
+software, either in source code form or as a compiled binary, for any purpose,
+commercial or non-commercial, and by any means.
+In jurisdictions that recognize copyright laws, the author or authors of this
+software dedicate any and all copyright interest in the software to the public
+domain. We make this dedication in the interest of the public and to the benefit
+of the public at large and to the detriment of our heirs and successors. We
+intend this dedication to be an overt act of relinquishment in perpetuity of
+all present and future rights to this software under copyright law.
+THE SOFTWARE IS PROVIDED "AS IS", WITHOUT WARRANTY OF ANY KIND, EXPRESS OR
+IMPLIED, INCLUDING BUT NOT LIMITED TO THE WARRANTIES OF MERCHANTABILITY,
+FITNESS FOR A PARTICULAR PURPOSE AND NONINFRINGEMENT. IN NO EVENT SHALL THE
+AUTHORS OR COPYRIGHT HOLDERS BE LIABLE FOR ANY CLAIM, DAMAGES OR OTHER
+LIABILITY, WHETHER IN AN ACTION OF CONTRACT, TORT OR OTHERWISE, ARISING FROM,
+OUT OF OR IN CONNECTION WITH THE SOFTWARE OR THE USE OR OTHER DEALINGS IN THE
+SOFTWARE.
+------------------------------------------------------------------------------
+*/
