@@ -1,0 +1,71 @@
+# hairobb: `make test` runs every test, `make bench` the benchmark on the
+# built-in fur scene, `make examples` builds the examples.
+CC       ?= cc
+ARCH     ?= -march=native
+# no FMA contraction: the SIMD and plain C paths must round identically
+CFLAGS   ?= -O2 -g
+WARN      = -std=c99 -Wall -Wextra -pedantic
+BASE      = $(WARN) $(CFLAGS) -ffp-contract=off -I.
+LIBS      = -lm
+EMBREE    = -lembree3
+B         = build
+
+TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_scenes $(B)/test_simd $(B)/test_accuracy
+
+.PHONY: all test deps compile-matrix bench examples clean
+all: $(TESTS) $(B)/bench examples
+
+deps:
+	@sh tests/install_deps.sh
+
+$(B):
+	@mkdir -p $(B)
+
+$(B)/test_reference: tests/test_reference.c tests/reference.h | $(B)
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
+
+$(B)/test_unit: tests/test_unit.c hairobb.h tests/reference.h tests/check.h | $(B)
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
+
+$(B)/test_scenes: tests/test_scenes.c tests/scenes.h tests/embree_wrap.h | $(B) deps
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
+
+# the same tracing code compiled three ways: plain C, SSE only, AVX
+$(B)/simd_plain.o: tests/simd_variant.c hairobb.h | $(B)
+	$(CC) $(BASE) -DHAIROBB_NO_SIMD -DVARIANT=trace_plain -c $< -o $@
+$(B)/simd_sse.o: tests/simd_variant.c hairobb.h | $(B)
+	$(CC) $(BASE) -msse4.1 -mno-avx -DVARIANT=trace_sse -c $< -o $@
+$(B)/simd_avx.o: tests/simd_variant.c hairobb.h | $(B)
+	$(CC) $(BASE) -mavx2 -DVARIANT=trace_avx -c $< -o $@
+$(B)/test_simd: tests/test_simd.c $(B)/simd_plain.o $(B)/simd_sse.o $(B)/simd_avx.o tests/scenes.h | $(B)
+	$(CC) $(BASE) $(ARCH) $(filter %.c %.o,$^) -o $@ $(LIBS)
+
+$(B)/test_accuracy: tests/test_accuracy.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
+
+$(B)/bench: bench/bench.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) -lpthread $(LIBS)
+
+# The header must compile clean as users compile it: gcc and clang, C99 and
+# C++11, -Werror, static, plain C.
+compile-matrix: | $(B)
+	@printf '#define HAIROBB_IMPLEMENTATION\n#include "hairobb.h"\nint main(void){return 0;}\n' > $(B)/matrix.c
+	@set -e; for cc in gcc clang; do command -v $$cc >/dev/null || continue; \
+	  for flags in "" "-DHAIROBB_STATIC" "-DHAIROBB_NO_SIMD" "-mavx2"; do \
+	    $$cc $(WARN) -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
+	    $$cc -x c++ -std=c++11 -Wall -Wextra -pedantic -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
+	    echo "compile-matrix: $$cc $$flags (C99 and C++11) clean"; done; done
+
+test: deps $(TESTS) compile-matrix
+	@sh tests/run_all.sh $(TESTS)
+
+bench: $(B)/bench
+	$(B)/bench
+
+examples: $(B)/minimal
+
+$(B)/minimal: examples/minimal.c hairobb.h | $(B)
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
+
+clean:
+	rm -rf $(B)

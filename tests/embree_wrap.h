@@ -1,0 +1,208 @@
+/* embree_wrap.h - Embree 3 as the reference for hairobb's tests and benchmarks.
+ *
+ * Header-only; every function is `static inline` (static, and inline only so
+ * that a program using part of the header gets no -Wunused-function warning).
+ * C99 and C++11. Link with -lembree3. Includes scenes.h (for its clock), so
+ * the same rule applies: a C file must define _POSIX_C_SOURCE 200809L before
+ * its first #include.
+ *
+ * One scene = one Embree device + one curve geometry that shares the
+ * caller's buffers (hairobb's layout: float4 x, y, z, radius vertices,
+ * 16-byte aligned with 16 bytes of padding; uint32 index of each segment's
+ * first control point). The buffers must outlive the emb_scene.
+ *
+ * Embree drops curve hits with t <= 2*r/|dir| (its self-intersection rule),
+ * so compare against it with rays that start away from hair.
+ */
+#ifndef HAIROBB_TESTS_EMBREE_WRAP_H
+#define HAIROBB_TESTS_EMBREE_WRAP_H
+
+#include <embree3/rtcore.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "scenes.h" /* scene_now */
+
+enum {
+    EMB_FLAT_BEZIER = 0,  /* RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE: ray-facing ribbon */
+    EMB_ROUND_BEZIER = 1  /* RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE: swept sphere */
+};
+
+typedef struct emb_scene {
+    RTCDevice device;
+    RTCScene scene;
+    /* Embree's running allocation total; updated by several build threads */
+    int64_t allocated_bytes;
+} emb_scene;
+
+static inline void emb_error_callback(void *user, enum RTCError code, const char *message)
+{
+    (void)user;
+    fprintf(stderr, "embree error %d: %s\n", (int)code, message ? message : "(no message)");
+}
+
+static inline bool emb_memory_callback(void *user, ssize_t bytes, bool post)
+{
+    /* bytes < 0 for frees; post calls only undo refused allocations, and we
+       never refuse, so every call simply adds to the total */
+    emb_scene *e = (emb_scene *)user;
+    (void)post;
+#if defined(__GNUC__) || defined(__clang__)
+    __atomic_fetch_add(&e->allocated_bytes, (int64_t)bytes, __ATOMIC_RELAXED);
+#else
+    e->allocated_bytes += (int64_t)bytes; /* not thread safe: use threads=1 */
+#endif
+    return true;
+}
+
+static inline int64_t emb_allocated_bytes(emb_scene *e)
+{
+#if defined(__GNUC__) || defined(__clang__)
+    return __atomic_load_n(&e->allocated_bytes, __ATOMIC_RELAXED);
+#else
+    return e->allocated_bytes;
+#endif
+}
+
+static inline void emb_free(emb_scene *e)
+{
+    if (!e)
+        return;
+    /* release before free: releasing calls the memory monitor, which writes to e */
+    if (e->scene)
+        rtcReleaseScene(e->scene);
+    if (e->device)
+        rtcReleaseDevice(e->device);
+    free(e);
+}
+
+/* Builds an Embree scene over the caller's buffers (shared, not copied).
+   type: EMB_FLAT_BEZIER or EMB_ROUND_BEZIER; tessellation_rate: 0 = Embree's
+   default, else rtcSetGeometryTessellationRate (flat curves); threads: 0 =
+   all cores, else "threads=N". Build quality medium (Embree's default), no
+   scene flags. memory_bytes (optional) = bytes Embree allocated during
+   rtcCommitScene, net of what it freed; build_seconds (optional) = wall time
+   of rtcCommitScene. Returns NULL on failure, after Embree's message has been
+   printed to stderr. */
+static inline emb_scene *emb_build(const float *vertices, size_t vertex_count, const uint32_t *indices,
+                                   size_t segment_count, int type, int tessellation_rate, int threads,
+                                   size_t *memory_bytes, double *build_seconds)
+{
+    if (memory_bytes)
+        *memory_bytes = 0;
+    if (build_seconds)
+        *build_seconds = 0.0;
+    enum RTCGeometryType geometry_type;
+    if (type == EMB_FLAT_BEZIER)
+        geometry_type = RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE;
+    else if (type == EMB_ROUND_BEZIER)
+        geometry_type = RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE;
+    else {
+        fprintf(stderr, "emb_build: unknown curve type %d\n", type);
+        return NULL;
+    }
+
+    emb_scene *e = (emb_scene *)calloc(1, sizeof *e);
+    if (!e)
+        return NULL;
+    char config[32];
+    if (threads > 0)
+        snprintf(config, sizeof config, "threads=%d", threads);
+    e->device = rtcNewDevice(threads > 0 ? config : NULL);
+    if (!e->device) {
+        /* no device to call back yet: ask for the error directly */
+        fprintf(stderr, "embree error %d: rtcNewDevice failed\n", (int)rtcGetDeviceError(NULL));
+        emb_free(e);
+        return NULL;
+    }
+    rtcSetDeviceErrorFunction(e->device, emb_error_callback, NULL);
+    rtcSetDeviceMemoryMonitorFunction(e->device, emb_memory_callback, e);
+
+    e->scene = rtcNewScene(e->device);
+    RTCGeometry geometry = rtcNewGeometry(e->device, geometry_type);
+    if (!e->scene || !geometry) {
+        if (geometry)
+            rtcReleaseGeometry(geometry);
+        emb_free(e);
+        return NULL;
+    }
+    /* Embree only reads shared buffers; its API is not const-qualified. */
+    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, (void *)vertices, 0,
+                               4 * sizeof(float), vertex_count);
+    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, (void *)indices, 0,
+                               sizeof(uint32_t), segment_count);
+    if (tessellation_rate > 0)
+        rtcSetGeometryTessellationRate(geometry, (float)tessellation_rate);
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometry(e->scene, geometry);
+    rtcReleaseGeometry(geometry); /* the scene holds its own reference */
+    rtcSetSceneBuildQuality(e->scene, RTC_BUILD_QUALITY_MEDIUM);
+
+    int64_t before = emb_allocated_bytes(e);
+    double start = scene_now();
+    rtcCommitScene(e->scene);
+    double seconds = scene_now() - start;
+    int64_t grown = emb_allocated_bytes(e) - before;
+    if (rtcGetDeviceError(e->device) != RTC_ERROR_NONE) { /* message already printed */
+        emb_free(e);
+        return NULL;
+    }
+    if (memory_bytes)
+        *memory_bytes = grown > 0 ? (size_t)grown : 0;
+    if (build_seconds)
+        *build_seconds = seconds;
+    return e;
+}
+
+static inline void emb_init_ray(struct RTCRay *ray, const float org[3], float tnear, const float dir[3], float tfar)
+{
+    ray->org_x = org[0]; ray->org_y = org[1]; ray->org_z = org[2];
+    ray->dir_x = dir[0]; ray->dir_y = dir[1]; ray->dir_z = dir[2];
+    ray->tnear = tnear;
+    ray->tfar = tfar;
+    ray->time = 0.0f;
+    ray->mask = 0xFFFFFFFFu;
+    ray->id = 0;
+    ray->flags = 0;
+}
+
+/* Closest hit in [tnear, tfar]: returns 1 and fills t, u (curve parameter),
+   v and prim (segment index), any of which may be NULL; 0 on a miss. */
+static inline int emb_intersect(const emb_scene *e, const float org[3], float tnear, const float dir[3], float tfar,
+                                float *t, float *u, float *v, uint32_t *prim)
+{
+    struct RTCRayHit ray_hit;
+    emb_init_ray(&ray_hit.ray, org, tnear, dir, tfar);
+    ray_hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    ray_hit.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    ray_hit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    struct RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    rtcIntersect1(e->scene, &context, &ray_hit);
+    if (ray_hit.hit.geomID == RTC_INVALID_GEOMETRY_ID)
+        return 0;
+    if (t)
+        *t = ray_hit.ray.tfar;
+    if (u)
+        *u = ray_hit.hit.u;
+    if (v)
+        *v = ray_hit.hit.v;
+    if (prim)
+        *prim = ray_hit.hit.primID;
+    return 1;
+}
+
+/* Any hit in [tnear, tfar]: 1 if occluded, else 0. */
+static inline int emb_occluded(const emb_scene *e, const float org[3], float tnear, const float dir[3], float tfar)
+{
+    struct RTCRay ray;
+    emb_init_ray(&ray, org, tnear, dir, tfar);
+    struct RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    rtcOccluded1(e->scene, &context, &ray);
+    /* Embree marks an occluded ray by setting tfar to -inf */
+    return ray.tfar < 0.0f;
+}
+
+#endif /* HAIROBB_TESTS_EMBREE_WRAP_H */
