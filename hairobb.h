@@ -236,9 +236,15 @@ HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray
 #define HAIROBB__SAMPLE 64              /* segments sampled to rank hair-space candidates */
 /* Relative costs of testing one child box and intersecting one segment.
    An OBB child costs a 3x4 transform of the ray before its slab test. */
+#ifndef HAIROBB__COST_AABB
 #define HAIROBB__COST_AABB 1.0f
+#endif
+#ifndef HAIROBB__COST_OBB
 #define HAIROBB__COST_OBB 2.0f
+#endif
+#ifndef HAIROBB__COST_SEGMENT
 #define HAIROBB__COST_SEGMENT 4.0f
+#endif
 
 /* Node references: low 4 bits type; inner nodes: byte offset (32-aligned);
    leaves: first index into leaf_prims << 8 | count << 4. */

@@ -298,7 +298,8 @@ static inline size_t scene_strand_count_for(size_t target_segments, size_t segme
    on (target_segments, seed). Return 0 on success. */
 
 /* Combed fur on the unit sphere: 8 segments per strand, 0.3-0.5 long, leaving
-   along the normal and bending over to ~75 degrees toward a smooth comb field
+   the surface 17-29 degrees off the normal and bending over, mostly near the
+   root, to 77-86 degrees (nearly flat) toward a smooth comb field
    (down the meridians with a swirl around the y axis), so neighbours lie
    alike and strands run diagonally to the coordinate axes. Radius 0.004 at
    the root (+-15% per strand) tapering to 0.001 at the tip. */
@@ -328,8 +329,8 @@ static inline int scene_combed(hair_scene *s, size_t target_segments, uint64_t s
         comb = scene_v3_add(scene_v3_scale(comb, cosf(twist)), scene_v3_scale(side, sinf(twist)));
 
         float length = scene_rng_range(&rng, 0.3f, 0.5f);
-        float bend_root = scene_rng_range(&rng, 0.05f, 0.2f);
-        float bend_tip = scene_rng_range(&rng, 1.2f, 1.4f);
+        float bend_root = scene_rng_range(&rng, 0.3f, 0.5f);
+        float bend_tip = scene_rng_range(&rng, 1.35f, 1.5f);
         float radius_root = 0.004f * scene_rng_range(&rng, 0.85f, 1.15f);
         const float radius_tip = 0.001f;
         float step = length / SEGMENTS;
@@ -341,7 +342,8 @@ static inline int scene_combed(hair_scene *s, size_t target_segments, uint64_t s
             /* Directions stay in the root's normal/comb plane: as the sphere
                curves away below that plane, the strand never dips inside it. */
             float along = ((float)i - 0.5f) / SEGMENTS;
-            float angle = bend_root + (bend_tip - bend_root) * along;
+            float bent = 1.0f - (1.0f - along) * (1.0f - along); /* most bending near the root */
+            float angle = bend_root + (bend_tip - bend_root) * bent;
             scene_vec3 direction = scene_v3_add(scene_v3_scale(normal, cosf(angle)),
                                                 scene_v3_scale(comb, sinf(angle)));
             p = scene_v3_add(p, scene_v3_scale(direction, step));

@@ -385,8 +385,8 @@ static trace_stats trace_camera(const emb_scene *e, const hair_scene *s, int wid
     size_t hits = 0;
     double start = scene_now();
     for (size_t i = 0; i < ray_count; i++) {
-        float t, u, v;
-        uint32_t prim;
+        float t = 0.0f, u = 0.0f, v = 0.0f;
+        uint32_t prim = 0;
         hit[i] = (unsigned char)emb_intersect(e, org + 3 * i, 0.0f, dir + 3 * i, INFINITY, &t, &u, &v, &prim);
         hit_t[i] = t;
         if (hit[i]) {
@@ -494,8 +494,30 @@ static void test_embree_scene(hair_scene *s, int check_transform)
     }
 }
 
+static void test_embree_options(void)
+{
+    hair_scene s;
+    if (scene_combed(&s, 10000, 3) != 0) {
+        check(0, "embree options: scene");
+        return;
+    }
+    double seconds = 0.0;
+    size_t memory = 0;
+    emb_scene *e = emb_build(s.vertices, s.vertex_count, s.indices, s.segment_count, EMB_FLAT_BEZIER, 8, 1,
+                             &memory, &seconds);
+    check(e != NULL && memory > 0 && seconds > 0.0,
+          "embree options: threads=1 and tessellation rate 8 build (%.1f MB, %.4f s)", (double)memory / 1e6, seconds);
+    emb_free(e);
+    printf("     (an error message about curve type 7 is expected next)\n");
+    e = emb_build(s.vertices, s.vertex_count, s.indices, s.segment_count, 7, 0, 0, &memory, &seconds);
+    check(e == NULL, "embree options: unknown curve type gives NULL");
+    emb_free(e);
+    scene_free(&s);
+}
+
 static void test_embree(const char *straight_path)
 {
+    test_embree_options();
     scene_generator generators[] = {scene_combed, scene_curly, scene_random, scene_crossing};
     for (size_t g = 0; g < sizeof generators / sizeof generators[0]; g++) {
         hair_scene s;
