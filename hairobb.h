@@ -1226,24 +1226,29 @@ static float hairobb__solve_bracketed(const hairobb__ray_curve *c, float lo, flo
     return u;
 }
 
-/* All roots of f in piece [a, b] (at most two are looked for: a sign change,
-   or a dip through zero around an extremum of f), each tried as a hit. */
-static int hairobb__refine_piece(hairobb__ray_state *rs, const hairobb__ray_curve *c, uint32_t prim, float a, float b)
+/* Roots of f in [a, b], each tried as a hit. A sign change brackets one.
+   Without one, two roots can hide where f dips through zero; halving the
+   interval `depth` times exposes such dips down to a quarter of a piece,
+   below that they are looked for around the extremum where f' changes sign. */
+static int hairobb__refine_range(hairobb__ray_state *rs, const hairobb__ray_curve *c, uint32_t prim,
+                                 float a, float b, float fa, float fb, float da, float db, int depth)
 {
-    float fa_derivative, fb_derivative;
-    float fa = hairobb__ribbon_f(c, a, &fa_derivative), fb = hairobb__ribbon_f(c, b, &fb_derivative);
+    float lo = a, hi = b, middle, f_middle, d_middle;
     int found = 0, iteration;
-    float lo, hi, middle, f_middle;
     if ((fa <= 0.0f && fb >= 0.0f) || (fa >= 0.0f && fb <= 0.0f))
         return hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, a, b, fa, fb));
-    /* no sign change: two roots hide only around an extremum of f, where f' changes sign */
-    if ((fa_derivative < 0.0f) == (fb_derivative < 0.0f)) return 0;
-    lo = a; hi = b;
+    if (depth > 0) {
+        middle = 0.5f * (a + b);
+        f_middle = hairobb__ribbon_f(c, middle, &d_middle);
+        found |= hairobb__refine_range(rs, c, prim, a, middle, fa, f_middle, da, d_middle, depth - 1);
+        found |= hairobb__refine_range(rs, c, prim, middle, b, f_middle, fb, d_middle, db, depth - 1);
+        return found;
+    }
+    if ((da < 0.0f) == (db < 0.0f)) return 0;
     for (iteration = 0; iteration < 20; ++iteration) {
-        float derivative;
         middle = 0.5f * (lo + hi);
-        hairobb__ribbon_f(c, middle, &derivative);
-        if ((derivative < 0.0f) == (fa_derivative < 0.0f)) lo = middle; else hi = middle;
+        hairobb__ribbon_f(c, middle, &d_middle);
+        if ((d_middle < 0.0f) == (da < 0.0f)) lo = middle; else hi = middle;
     }
     middle = 0.5f * (lo + hi);
     f_middle = hairobb__ribbon_f(c, middle, NULL);
@@ -1251,6 +1256,13 @@ static int hairobb__refine_piece(hairobb__ray_state *rs, const hairobb__ray_curv
     found |= hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, a, middle, fa, f_middle));
     found |= hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, middle, b, f_middle, fb));
     return found;
+}
+
+static int hairobb__refine_piece(hairobb__ray_state *rs, const hairobb__ray_curve *c, uint32_t prim, float a, float b)
+{
+    float da, db;
+    float fa = hairobb__ribbon_f(c, a, &da), fb = hairobb__ribbon_f(c, b, &db);
+    return hairobb__refine_range(rs, c, prim, a, b, fa, fb, da, db, 2);
 }
 
 /* The linear piece alone (HAIROBB_PRECISION_PIECES): hit where the closest

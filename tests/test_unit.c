@@ -348,6 +348,29 @@ static void test_hit_attributes(void)
     free(indices);
 }
 
+/* A wiggle seen almost end-on: f = dot(P2, P2') has three roots, two of
+   them inside one linear piece with f of equal sign at both its ends. The
+   nearest is the first root; found by the reference, it must be found here. */
+static void test_roots_hidden_in_one_piece(void)
+{
+    static const float cp[16] = {
+        -0.00720855594f, 0.0268633962f, 1.75773466f, 0.00097127f,
+        0.00180314481f, 0.00120264292f, 1.76457095f, 0.000937457f,
+        0.00125399232f, -0.00672522187f, 1.78056204f, 0.000903643f,
+        -0.00104784966f, 0.00540038943f, 1.80574322f, 0.000869829f};
+    static const uint32_t index = 0;
+    hairobb_bvh *bvh;
+    hairobb_ray ray = {{0.0f, 0.0f, 0.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY};
+    hairobb_hit hit;
+    ref_hit ref;
+    memset(&ref, 0, sizeof ref);
+    CHECK(hairobb_build(cp, 4, &index, 1, NULL, &bvh) == HAIROBB_OK, "build");
+    CHECK(ref_intersect_segment(cp, &index, 0, ray.org, ray.dir, 0.0, INFINITY, &ref), "the reference hits");
+    CHECK(hairobb_intersect1(bvh, &ray, &hit) && fabs(hit.t - ref.t) < 1e-3 * ref.r,
+          "nearest of three roots: t %.7f u %.5f, reference t %.7f u %.5f", hit.t, hit.u, ref.t, ref.u);
+    hairobb_free(bvh);
+}
+
 static void test_bad_input(void)
 {
     float *vertices;
@@ -440,6 +463,7 @@ int main(void)
     test_hair_space();
     test_bounds_and_traversal();
     test_hit_attributes();
+    test_roots_hidden_in_one_piece();
     test_bad_input();
     test_allocation_failure();
     return check_summary();
