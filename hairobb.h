@@ -1194,17 +1194,22 @@ static float hairobb__ribbon_f(const hairobb__ray_curve *c, float u, float *deri
     return x * dx + y * dy;
 }
 
-/* Accepts u if the ribbon there covers the ray axis and t is nearer. */
-static int hairobb__try_hit(hairobb__ray_state *rs, const hairobb__ray_curve *c, uint32_t prim, float u)
+/* Records the hit if the ribbon point (x, y) covers the ray axis within
+   radius r and t is in [tnear, tfar]: the nearest hit so far. */
+static int hairobb__accept(hairobb__ray_state *rs, uint32_t prim, float u, float t, float x, float y, float r)
 {
-    float x = hairobb__bezier(c->x, u, NULL, NULL), y = hairobb__bezier(c->y, u, NULL, NULL);
-    float r = hairobb__maxf(hairobb__bezier(c->r, u, NULL, NULL), 0.0f);
-    float t = hairobb__bezier(c->z, u, NULL, NULL) * rs->inv_dir_length;
     if (!(x * x + y * y <= r * r) || !(t >= rs->tnear) || !(t <= rs->tfar)) return 0;
     rs->tfar = t;
     rs->hit_prim = prim;
     rs->hit_u = u;
     return 1;
+}
+
+static int hairobb__try_hit(hairobb__ray_state *rs, const hairobb__ray_curve *c, uint32_t prim, float u)
+{
+    return hairobb__accept(rs, prim, u, hairobb__bezier(c->z, u, NULL, NULL) * rs->inv_dir_length,
+                           hairobb__bezier(c->x, u, NULL, NULL), hairobb__bezier(c->y, u, NULL, NULL),
+                           hairobb__maxf(hairobb__bezier(c->r, u, NULL, NULL), 0.0f));
 }
 
 /* Root of f in [lo, hi] where f changes sign: Newton steps, bisection when a
@@ -1274,13 +1279,8 @@ static int hairobb__piece_hit(hairobb__ray_state *rs, const hairobb__ray_curve *
     float ya = hairobb__bezier(c->y, a, NULL, NULL), yb = hairobb__bezier(c->y, b, NULL, NULL);
     float za = hairobb__bezier(c->z, a, NULL, NULL), zb = hairobb__bezier(c->z, b, NULL, NULL);
     float ra = hairobb__bezier(c->r, a, NULL, NULL), rb = hairobb__bezier(c->r, b, NULL, NULL);
-    float x = xa + s * (xb - xa), y = ya + s * (yb - ya), r = ra + s * (rb - ra);
-    float t = (za + s * (zb - za)) * rs->inv_dir_length;
-    if (!(x * x + y * y <= r * r) || !(t >= rs->tnear) || !(t <= rs->tfar)) return 0;
-    rs->tfar = t;
-    rs->hit_prim = prim;
-    rs->hit_u = a + s * (b - a);
-    return 1;
+    return hairobb__accept(rs, prim, a + s * (b - a), (za + s * (zb - za)) * rs->inv_dir_length,
+                           xa + s * (xb - xa), ya + s * (yb - ya), ra + s * (rb - ra));
 }
 
 static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint32_t prim, int any_hit)
