@@ -492,7 +492,8 @@ static hairobb_result hairobb__validate(const float *vertices, size_t vertex_cou
 /* Box of a segment in a rotated frame (rows of frame are the new axes).
    The ribbon lies in the convex hull of the control points dilated by the
    largest radius (r(u) is a convex combination of the 4 radii), so the box of
-   the rotated control points grown by that radius bounds it. */
+   the rotated control points grown by that radius bounds it. Node boxes are
+   padded for rounding once, when stored (hairobb__pad_box). */
 static void hairobb__segment_box(const float *cp, const float frame[9], float lower[3], float upper[3])
 {
     int i, k;
@@ -506,7 +507,6 @@ static void hairobb__segment_box(const float *cp, const float frame[9], float lo
         }
     }
     for (k = 0; k < 3; ++k) { lower[k] -= radius; upper[k] += radius; }
-    hairobb__pad_box(lower, upper);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -516,6 +516,7 @@ typedef struct hairobb__builder {
     const float *vertices;
     const uint32_t *indices;
     float *world_boxes;               /* 6 per segment: lower, upper */
+    float *frame_boxes;               /* 6 per position of ids: boxes in the frame being binned */
     uint32_t *ids;                    /* partitioned in place; becomes leaf_prims */
     unsigned char *node_allocation, *nodes;
     size_t node_bytes, node_capacity;
@@ -605,6 +606,15 @@ static int hairobb__bin_of(float centroid, float origin, float scale)
     return bin < 0 ? 0 : bin >= HAIROBB__BINS ? HAIROBB__BINS - 1 : bin;
 }
 
+/* Box of the segment at position i of ids: its world box, or (frame given)
+   the box hairobb__bin_split computed in that frame. */
+static void hairobb__box_at(const hairobb__builder *b, const float *frame, size_t i, float lower[3], float upper[3])
+{
+    const float *box = frame ? b->frame_boxes + 6 * i : b->world_boxes + 6 * (size_t)b->ids[i];
+    memcpy(lower, box, 3 * sizeof(float));
+    memcpy(upper, box + 3, 3 * sizeof(float));
+}
+
 /* Best SAH object split of ids[begin, end) binned by centroid along the axes
    of frame (NULL = world axes). Costs are SAH costs times the parent's area;
    box_cost is that of testing the two new child boxes. */
@@ -614,11 +624,15 @@ static void hairobb__bin_split(const hairobb__builder *b, size_t begin, size_t e
     float cmin[3], cmax[3];
     size_t i;
     int axis;
+    if (frame) {
+        for (i = begin; i < end; ++i)
+            hairobb__segment_box(hairobb__control_points(b, b->ids[i]), frame, b->frame_boxes + 6 * i, b->frame_boxes + 6 * i + 3);
+    }
     hairobb__box_empty(cmin, cmax);
     for (i = begin; i < end; ++i) {
         float lower[3], upper[3], c[3];
         int k;
-        hairobb__prim_box(b, b->ids[i], frame, lower, upper);
+        hairobb__box_at(b, frame, i, lower, upper);
         for (k = 0; k < 3; ++k) c[k] = 0.5f * (lower[k] + upper[k]);
         hairobb__box_grow(cmin, cmax, c, c);
     }
@@ -636,7 +650,7 @@ static void hairobb__bin_split(const hairobb__builder *b, size_t begin, size_t e
         }
         for (i = begin; i < end; ++i) {
             float lower[3], upper[3];
-            hairobb__prim_box(b, b->ids[i], frame, lower, upper);
+            hairobb__box_at(b, frame, i, lower, upper);
             bin = hairobb__bin_of(0.5f * (lower[axis] + upper[axis]), cmin[axis], scale);
             hairobb__box_grow(bin_lower[bin], bin_upper[bin], lower, upper);
             bin_count[bin]++;
@@ -847,6 +861,7 @@ static uint64_t hairobb__build_node(hairobb__builder *b, size_t begin, size_t en
             if (i < count) {
                 hairobb__choose_hair_space(b, children[i].begin, children[i].end, 1, frame);
                 hairobb__range_box(b, children[i].begin, children[i].end, frame, lower, upper);
+                hairobb__pad_box(lower, upper);
             } else {
                 /* an empty child maps everything to (2,2,2): never inside the unit cube */
                 memset(frame, 0, sizeof frame);
@@ -862,8 +877,10 @@ static uint64_t hairobb__build_node(hairobb__builder *b, size_t begin, size_t en
         for (i = 0; i < 4; ++i) {
             float lower[3], upper[3];
             int k;
-            if (i < count) hairobb__range_box(b, children[i].begin, children[i].end, NULL, lower, upper);
-            else { for (k = 0; k < 3; ++k) { lower[k] = INFINITY; upper[k] = -INFINITY; } }
+            if (i < count) {
+                hairobb__range_box(b, children[i].begin, children[i].end, NULL, lower, upper);
+                hairobb__pad_box(lower, upper);
+            } else { for (k = 0; k < 3; ++k) { lower[k] = INFINITY; upper[k] = -INFINITY; } }
             for (k = 0; k < 3; ++k) { node->lower[k][i] = lower[k]; node->upper[k][i] = upper[k]; }
             node->child[i] = i < count ? refs[i] : HAIROBB__REF_EMPTY;
         }
@@ -939,8 +956,9 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     b.candidates = opt.hair_space_candidates;
     bvh = HAIROBB__CAST(hairobb_bvh *, HAIROBB_MALLOC(sizeof *bvh, b.user));
     b.world_boxes = HAIROBB__CAST(float *, HAIROBB_MALLOC(6 * sizeof(float) * segment_count, b.user));
+    b.frame_boxes = HAIROBB__CAST(float *, HAIROBB_MALLOC(6 * sizeof(float) * segment_count, b.user));
     b.ids = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(sizeof(uint32_t) * segment_count, b.user));
-    if (!bvh || !b.world_boxes || !b.ids) goto out_of_memory;
+    if (!bvh || !b.world_boxes || !b.frame_boxes || !b.ids) goto out_of_memory;
     memset(bvh, 0, sizeof *bvh);
 
     hairobb__identity_frame(identity);
@@ -965,6 +983,8 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
         HAIROBB_FREE(b.node_allocation, b.user);
     }
     HAIROBB_FREE(b.world_boxes, b.user);
+    HAIROBB_FREE(b.frame_boxes, b.user);
+    hairobb__pad_box(bvh->lower, bvh->upper);
     bvh->vertices = vertices;
     bvh->indices = indices;
     bvh->vertex_count = vertex_count;
@@ -983,6 +1003,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
 out_of_memory:
     if (b.node_allocation) HAIROBB_FREE(b.node_allocation, b.user);
     if (b.world_boxes) HAIROBB_FREE(b.world_boxes, b.user);
+    if (b.frame_boxes) HAIROBB_FREE(b.frame_boxes, b.user);
     if (b.ids) HAIROBB_FREE(b.ids, b.user);
     if (bvh) HAIROBB_FREE(bvh, b.user);
     return HAIROBB_ERROR_OUT_OF_MEMORY;
