@@ -83,6 +83,9 @@ int main(void)
             options.precision = HAIROBB_PRECISION_EXACT;
             options.curve_pieces = 13;
             compare_paths(&scenes[k], &options, "exact, 13 pieces");
+            options.curve_pieces = 0;
+            options.obb_layout = HAIROBB_OBB_SHARED_ROTATION;
+            compare_paths(&scenes[k], &options, "shared-rotation OBBs");
         }
         scene_free(&scenes[k]);
     }

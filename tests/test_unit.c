@@ -158,6 +158,12 @@ static int point_in_node(const hairobb_bvh *bvh, uint64_t ref, int lane, const d
         const hairobb__aabb_node *a = (const hairobb__aabb_node *)node;
         for (k = 0; k < 3; ++k)
             if (p[k] < a->lower[k][lane] || p[k] > a->upper[k][lane]) return 0;
+    } else if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_ROTATED) {
+        const hairobb__rotated_node *r = (const hairobb__rotated_node *)node;
+        for (k = 0; k < 3; ++k) {
+            double q = r->rotation[3 * k] * p[0] + r->rotation[3 * k + 1] * p[1] + r->rotation[3 * k + 2] * p[2];
+            if (q < r->lower[k][lane] || q > r->upper[k][lane]) return 0;
+        }
     } else {
         const hairobb__obb_node *o = (const hairobb__obb_node *)node;
         for (k = 0; k < 3; ++k) {
@@ -195,10 +201,11 @@ static long check_subtree(const hairobb_bvh *bvh, uint64_t ref, box_path *path, 
         }
         return outside;
     }
-    if (HAIROBB__REF_TYPE(ref) <= HAIROBB__REF_OBB) {
-        const uint64_t *child = HAIROBB__REF_TYPE(ref) == HAIROBB__REF_AABB
-                                    ? ((const hairobb__aabb_node *)(bvh->nodes + (ref & ~(uint64_t)15)))->child
-                                    : ((const hairobb__obb_node *)(bvh->nodes + (ref & ~(uint64_t)15)))->child;
+    if (HAIROBB__REF_TYPE(ref) != HAIROBB__REF_EMPTY) {
+        const void *node = bvh->nodes + (ref & ~(uint64_t)15);
+        const uint64_t *child = HAIROBB__REF_TYPE(ref) == HAIROBB__REF_AABB      ? ((const hairobb__aabb_node *)node)->child
+                                : HAIROBB__REF_TYPE(ref) == HAIROBB__REF_ROTATED ? ((const hairobb__rotated_node *)node)->child
+                                                                                 : ((const hairobb__obb_node *)node)->child;
         int lane;
         for (lane = 0; lane < 4; ++lane) {
             if (child[lane] == HAIROBB__REF_EMPTY) continue;
@@ -212,7 +219,7 @@ static long check_subtree(const hairobb_bvh *bvh, uint64_t ref, box_path *path, 
     return outside;
 }
 
-static const char *policy_name[] = {"mixed", "aabb-only", "obb-only"};
+static const char *policy_name[] = {"mixed", "aabb-only", "obb-only", "mixed, shared-rotation OBBs"};
 
 static void test_bounds_and_traversal(void)
 {
@@ -221,7 +228,7 @@ static void test_bounds_and_traversal(void)
     uint32_t *indices;
     int policy;
     make_scene(n, &vertices, &indices);
-    for (policy = 0; policy < 3; ++policy) {
+    for (policy = 0; policy < 4; ++policy) {
         hairobb_build_options opt;
         hairobb_bvh *bvh = NULL;
         hairobb_stats stats;
@@ -229,14 +236,15 @@ static void test_bounds_and_traversal(void)
         long seen = 0, outside, mismatches = 0, occluded_mismatches = 0, hits = 0;
         int r;
         memset(&opt, 0, sizeof opt);
-        opt.nodes = (hairobb_node_policy)policy;
+        opt.nodes = policy == 3 ? HAIROBB_NODES_MIXED : (hairobb_node_policy)policy;
+        opt.obb_layout = policy == 3 ? HAIROBB_OBB_SHARED_ROTATION : HAIROBB_OBB_PER_CHILD;
         CHECK(hairobb_build(vertices, 4 * n, indices, n, &opt, &bvh) == HAIROBB_OK, "build %s", policy_name[policy]);
         if (!bvh) continue;
         hairobb_get_stats(bvh, &stats);
         CHECK(stats.leaf_references == n, "%s: %zu leaf references for %zu segments", policy_name[policy], stats.leaf_references, n);
         CHECK(policy != HAIROBB_NODES_AABB_ONLY || stats.obb_nodes == 0, "aabb-only built %zu OBB nodes", stats.obb_nodes);
         CHECK(policy != HAIROBB_NODES_OBB_ONLY || stats.aabb_nodes == 0, "obb-only built %zu AABB nodes", stats.aabb_nodes);
-        CHECK(policy != HAIROBB_NODES_MIXED || (stats.obb_nodes > 0 && stats.aabb_nodes > 0),
+        CHECK((policy != HAIROBB_NODES_MIXED && policy != 3) || (stats.obb_nodes > 0 && stats.aabb_nodes > 0),
               "mixed built %zu AABB and %zu OBB nodes", stats.aabb_nodes, stats.obb_nodes);
         CHECK(hairobb_memory_bytes(bvh) >= stats.node_bytes + stats.leaf_bytes, "memory_bytes %zu", hairobb_memory_bytes(bvh));
         path.depth = 0;
@@ -411,6 +419,9 @@ static void test_bad_input(void)
     memset(&opt, 0, sizeof opt);
     opt.nodes = (hairobb_node_policy)7;
     CHECK(hairobb_build(vertices, 32, indices, n, &opt, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT, "bad node policy");
+    memset(&opt, 0, sizeof opt);
+    opt.obb_layout = (hairobb_obb_layout)2;
+    CHECK(hairobb_build(vertices, 32, indices, n, &opt, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT, "bad OBB layout");
     memset(&opt, 0, sizeof opt);
     opt.curve_pieces = 17;
     CHECK(hairobb_build(vertices, 32, indices, n, &opt, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT, "17 pieces");
