@@ -1281,12 +1281,41 @@ static void hairobb__to_ray_space(const hairobb__ray_state *rs, const float *cp,
     }
 }
 
+/* The same curve in power form, a[0] + a[1] u + a[2] u^2 + a[3] u^3: the
+   root finder evaluates it many times, Horner's rule makes that cheap. */
+typedef struct hairobb__ray_poly {
+    float x[4], y[4], z[4], r[4];
+} hairobb__ray_poly;
+
+static void hairobb__power_form(const float c[4], float a[4])
+{
+    a[0] = c[0];
+    a[1] = 3.0f * (c[1] - c[0]);
+    a[2] = 3.0f * (c[2] - 2.0f * c[1] + c[0]);
+    a[3] = c[3] - 3.0f * c[2] + 3.0f * c[1] - c[0];
+}
+
+static void hairobb__to_power_form(const hairobb__ray_curve *c, hairobb__ray_poly *p)
+{
+    hairobb__power_form(c->x, p->x);
+    hairobb__power_form(c->y, p->y);
+    hairobb__power_form(c->z, p->z);
+    hairobb__power_form(c->r, p->r);
+}
+
+static float hairobb__horner(const float a[4], float u, float *d1, float *d2)
+{
+    if (d1) *d1 = (3.0f * a[3] * u + 2.0f * a[2]) * u + a[1];
+    if (d2) *d2 = 6.0f * a[3] * u + 2.0f * a[2];
+    return ((a[3] * u + a[2]) * u + a[1]) * u + a[0];
+}
+
 /* f(u) = dot(P2, P2') vanishes where the ribbon faces the ray; f'(u) too. */
-static float hairobb__ribbon_f(const hairobb__ray_curve *c, float u, float *derivative)
+static float hairobb__ribbon_f(const hairobb__ray_poly *c, float u, float *derivative)
 {
     float dx, dy, ddx, ddy;
-    float x = hairobb__bezier(c->x, u, &dx, &ddx);
-    float y = hairobb__bezier(c->y, u, &dy, &ddy);
+    float x = hairobb__horner(c->x, u, &dx, &ddx);
+    float y = hairobb__horner(c->y, u, &dy, &ddy);
     if (derivative) *derivative = dx * dx + dy * dy + x * ddx + y * ddy;
     return x * dx + y * dy;
 }
@@ -1302,16 +1331,16 @@ static int hairobb__accept(hairobb__ray_state *rs, uint32_t prim, float u, float
     return 1;
 }
 
-static int hairobb__try_hit(hairobb__ray_state *rs, const hairobb__ray_curve *c, uint32_t prim, float u)
+static int hairobb__try_hit(hairobb__ray_state *rs, const hairobb__ray_poly *c, uint32_t prim, float u)
 {
-    return hairobb__accept(rs, prim, u, hairobb__bezier(c->z, u, NULL, NULL) * rs->inv_dir_length,
-                           hairobb__bezier(c->x, u, NULL, NULL), hairobb__bezier(c->y, u, NULL, NULL),
-                           hairobb__maxf(hairobb__bezier(c->r, u, NULL, NULL), 0.0f));
+    return hairobb__accept(rs, prim, u, hairobb__horner(c->z, u, NULL, NULL) * rs->inv_dir_length,
+                           hairobb__horner(c->x, u, NULL, NULL), hairobb__horner(c->y, u, NULL, NULL),
+                           hairobb__maxf(hairobb__horner(c->r, u, NULL, NULL), 0.0f));
 }
 
 /* Root of f in [lo, hi] where f changes sign: Newton steps, bisection when a
    step leaves the bracket. */
-static float hairobb__solve_bracketed(const hairobb__ray_curve *c, float lo, float hi, float f_lo, float f_hi)
+static float hairobb__solve_bracketed(const hairobb__ray_poly *c, float lo, float hi, float f_lo, float f_hi)
 {
     float u = f_lo == f_hi ? 0.5f * (lo + hi) : lo + (hi - lo) * (f_lo / (f_lo - f_hi));
     int iteration;
@@ -1332,7 +1361,7 @@ static float hairobb__solve_bracketed(const hairobb__ray_curve *c, float lo, flo
    Without one, two roots can hide where f dips through zero; halving the
    interval `depth` times exposes such dips down to a quarter of a piece,
    below that they are looked for around the extremum where f' changes sign. */
-static int hairobb__refine_range(hairobb__ray_state *rs, const hairobb__ray_curve *c, uint32_t prim,
+static int hairobb__refine_range(hairobb__ray_state *rs, const hairobb__ray_poly *c, uint32_t prim,
                                  float a, float b, float fa, float fb, float da, float db, int depth)
 {
     float lo = a, hi = b, middle, f_middle, d_middle;
@@ -1360,7 +1389,7 @@ static int hairobb__refine_range(hairobb__ray_state *rs, const hairobb__ray_curv
     return found;
 }
 
-static int hairobb__refine_piece(hairobb__ray_state *rs, const hairobb__ray_curve *c, uint32_t prim, float a, float b)
+static int hairobb__refine_piece(hairobb__ray_state *rs, const hairobb__ray_poly *c, uint32_t prim, float a, float b)
 {
     float da, db;
     float fa = hairobb__ribbon_f(c, a, &da), fb = hairobb__ribbon_f(c, b, &db);
@@ -1383,6 +1412,8 @@ static int hairobb__piece_hit(hairobb__ray_state *rs, const hairobb__ray_curve *
 static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint32_t prim, int any_hit)
 {
     hairobb__ray_curve c;
+    hairobb__ray_poly poly;
+    int have_poly = 0;
     float max_r, min_x, max_x, min_y, max_y, min_z, max_z, bend, bend_r, pad, magnitude;
     int i, chunk, found = 0;
     hairobb__to_ray_space(rs, bvh->vertices + 4 * (size_t)bvh->indices[prim], &c);
@@ -1448,10 +1479,12 @@ static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state
             int lane = hairobb__lowest_bit(bits), k = 8 * chunk + lane;
             float a = (float)k / (float)bvh->pieces, b = (float)(k + 1) / (float)bvh->pieces;
             bits &= bits - 1;
-            if (bvh->precision == HAIROBB_PRECISION_PIECES)
+            if (bvh->precision == HAIROBB_PRECISION_PIECES) {
                 found |= hairobb__piece_hit(rs, &c, prim, a, b, s_lanes[lane]);
-            else
-                found |= hairobb__refine_piece(rs, &c, prim, a, b);
+            } else {
+                if (!have_poly) { hairobb__to_power_form(&c, &poly); have_poly = 1; }
+                found |= hairobb__refine_piece(rs, &poly, prim, a, b);
+            }
             if (found && any_hit) return 1;
         }
     }
