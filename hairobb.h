@@ -1447,7 +1447,7 @@ static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state
         const float (*w)[4][8] = bvh->piece_weights[chunk];
         hairobb__v8 end_x[2], end_y[2], end_r[2];
         hairobb__v8 dx, dy, len2, s, px, py, reach;
-        unsigned bits;
+        unsigned bits, inside;
         float s_lanes[8];
         int e;
         for (e = 0; e < 2; ++e) {
@@ -1465,6 +1465,9 @@ static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state
         dy = hairobb__v8_sub(end_y[1], end_y[0]);
         len2 = hairobb__v8_max(hairobb__v8_add(hairobb__v8_mul(dx, dx), hairobb__v8_mul(dy, dy)), hairobb__v8_set1(FLT_MIN));
         s = hairobb__v8_div(hairobb__v8_sub(hairobb__v8_set1(0.0f), hairobb__v8_add(hairobb__v8_mul(end_x[0], dx), hairobb__v8_mul(end_y[0], dy))), len2);
+        /* a flat ribbon has no end caps: the pieces alone are hit only between
+           their ends; the exact test clamps, to find every candidate piece */
+        inside = (unsigned)(hairobb__v8_le_bits(hairobb__v8_set1(0.0f), s) & hairobb__v8_le_bits(s, hairobb__v8_set1(1.0f)));
         s = hairobb__v8_max(hairobb__v8_min(s, hairobb__v8_set1(1.0f)), hairobb__v8_set1(0.0f));
         px = hairobb__v8_add(end_x[0], hairobb__v8_mul(s, dx));
         py = hairobb__v8_add(end_y[0], hairobb__v8_mul(s, dy));
@@ -1474,7 +1477,10 @@ static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state
             reach = hairobb__v8_add(hairobb__v8_max(end_r[0], end_r[1]), hairobb__v8_set1(pad));
         bits = (unsigned)hairobb__v8_le_bits(hairobb__v8_add(hairobb__v8_mul(px, px), hairobb__v8_mul(py, py)),
                                              hairobb__v8_mul(reach, reach)) & bvh->chunk_valid[chunk];
-        if (bits && bvh->precision == HAIROBB_PRECISION_PIECES) hairobb__v8_store(s_lanes, s);
+        if (bvh->precision == HAIROBB_PRECISION_PIECES) {
+            bits &= inside;
+            if (bits) hairobb__v8_store(s_lanes, s);
+        }
         while (bits) {
             int lane = hairobb__lowest_bit(bits), k = 8 * chunk + lane;
             float a = (float)k / (float)bvh->pieces, b = (float)(k + 1) / (float)bvh->pieces;
