@@ -44,7 +44,7 @@ $(B)/test_accuracy: tests/test_accuracy.c hairobb.h tests/reference.h tests/scen
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
 
 $(B)/bench: bench/bench.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps
-	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) -lpthread $(LIBS)
+	$(CC) $(BASE) $(ARCH) -DBENCH_CFLAGS='"$(BASE) $(ARCH)"' $< -o $@ $(EMBREE) -lpthread $(LIBS)
 
 # The header must compile clean as users compile it: gcc and clang, C99 and
 # C++11, -Werror, static, plain C.

@@ -1,0 +1,1519 @@
+/* bench.c - hairobb's benchmark: speed, memory and accuracy of hairobb
+   against Embree's curves on the same buffers and the same rays.
+
+   `make bench` runs it with no arguments on the procedural combed-fur scene;
+   `build/bench --help` lists the options. For each scene it measures, per
+   variant (hairobb build options, Embree curve types and tessellation
+   rates): build time, memory, Mrays/s on primary, incoherent (diffuse
+   bounce) and shadow rays on 1 and all threads, and accuracy against the
+   double-precision reference on a fixed random subset of the primary rays.
+   Tables go to stdout, progress to stderr (terminals only), every figure to
+   a TSV file, and run time against error to a gnuplot chart.
+
+   Fairness rules: every tracer runs through the same timing harness (one
+   function pointer call per ray, same thread layout, same ray buffers);
+   secondary rays are spawned once per scene and shared by all variants. */
+#define _POSIX_C_SOURCE 200809L
+#define HAIROBB_IMPLEMENTATION
+#include "hairobb.h"
+#include "tests/embree_wrap.h"
+#include "tests/reference.h"
+#include "tests/scenes.h"
+
+#include <errno.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+/* ======================================================================== */
+/* Configuration                                                            */
+/* ======================================================================== */
+
+enum {
+    MAX_SCENES = 16,
+    MAX_THREAD_COUNTS = 8,
+    RAY_BLOCK = 64,            /* rays per work item; blocks interleave across threads */
+    DEFAULT_SEGMENTS = 200000,
+    DEFAULT_RESOLUTION = 1024,
+    DEFAULT_PASSES = 3,
+    DEFAULT_ACCURACY_RAYS = 16384
+};
+
+#define DEFAULT_STRAIGHT_PATH "../shared/data/straight.hair"
+#define DEFAULT_TSV_PATH "build/bench.tsv"
+#define DEFAULT_PNG_PATH "build/bench_error.png"
+#define DEFAULT_PLOT_SCRIPT "bench/plot.gp"
+
+typedef enum ray_kind { RAYS_PRIMARY, RAYS_INCOHERENT, RAYS_SHADOW, RAY_KIND_COUNT } ray_kind;
+static const char *const ray_kind_names[RAY_KIND_COUNT] = {"primary", "incoherent", "shadow"};
+
+typedef struct options {
+    const char *scenes[MAX_SCENES];
+    int scene_count;
+    size_t segments;
+    int resolution;
+    int ray_kind_enabled[RAY_KIND_COUNT];
+    unsigned thread_counts[MAX_THREAD_COUNTS];
+    int thread_count_count;
+    const char *variant_list;
+    int passes;
+    size_t accuracy_rays;
+    const char *tsv_path, *png_path, *plot_script;
+    const char *straight_path, *furball_path;
+    int quiet;
+} options;
+
+static int show_progress; /* stderr is a terminal and --quiet was not given */
+
+/* Progress lines: progress() writes a line, or ends one that
+   progress_start() began with what is about to run, so that a slow step
+   shows what it is while it runs and its outcome after. */
+static void progress_write(const char *format, va_list args, const char *end)
+{
+    vfprintf(stderr, format, args);
+    fputs(end, stderr);
+    fflush(stderr);
+}
+
+static void progress(const char *format, ...)
+{
+    if (!show_progress)
+        return;
+    va_list args;
+    va_start(args, format);
+    progress_write(format, args, "\n");
+    va_end(args);
+}
+
+static void progress_start(const char *format, ...)
+{
+    if (!show_progress)
+        return;
+    va_list args;
+    va_start(args, format);
+    progress_write(format, args, "... ");
+    va_end(args);
+}
+
+/* ======================================================================== */
+/* Variants                                                                 */
+/* ======================================================================== */
+
+typedef enum library { LIB_HAIROBB, LIB_EMBREE } library;
+
+typedef struct variant {
+    const char *key;     /* name on the command line and in the TSV */
+    const char *label;   /* name in the tables */
+    library lib;
+    hairobb_node_policy nodes;
+    hairobb_precision precision;
+    unsigned curve_pieces;
+    int embree_type, embree_rate; /* rate 0 = Embree's default */
+    /* Embree's round curves are swept spheres, not the reference's ribbon:
+       their "errors" measure the difference of surfaces, not accuracy. */
+    int accuracy_comparable;
+    int on_chart;        /* a point of the run time against error chart */
+} variant;
+
+#define HAIROBB_ROW(key, label, nodes, precision, pieces, on_chart) \
+    {key, label, LIB_HAIROBB, HAIROBB_NODES_##nodes, HAIROBB_PRECISION_##precision, pieces, 0, 0, 1, on_chart}
+#define EMBREE_ROW(key, label, type, rate, comparable, on_chart) \
+    {key, label, LIB_EMBREE, HAIROBB_NODES_MIXED, HAIROBB_PRECISION_EXACT, 0, type, rate, comparable, on_chart}
+static const variant all_variants[] = {
+    /* precision points: exact and pieces-only intersectors, 4 to 16 pieces */
+    HAIROBB_ROW("default", "hairobb default", MIXED, EXACT, 8, 1),
+    HAIROBB_ROW("exact4", "hairobb exact 4", MIXED, EXACT, 4, 1),
+    HAIROBB_ROW("exact16", "hairobb exact 16", MIXED, EXACT, 16, 1),
+    HAIROBB_ROW("pieces4", "hairobb pieces 4", MIXED, PIECES, 4, 1),
+    HAIROBB_ROW("pieces8", "hairobb pieces 8", MIXED, PIECES, 8, 1),
+    HAIROBB_ROW("pieces16", "hairobb pieces 16", MIXED, PIECES, 16, 1),
+    /* ablation of the node policy; "mixed" is the default row */
+    HAIROBB_ROW("aabb", "hairobb AABB-only", AABB_ONLY, EXACT, 8, 0),
+    HAIROBB_ROW("obb", "hairobb OBB-only", OBB_ONLY, EXACT, 8, 0),
+    EMBREE_ROW("embree-r4", "Embree flat r4", EMB_FLAT_BEZIER, 4, 1, 1),
+    EMBREE_ROW("embree-r8", "Embree flat r8", EMB_FLAT_BEZIER, 8, 1, 1),
+    EMBREE_ROW("embree-r16", "Embree flat r16", EMB_FLAT_BEZIER, 16, 1, 1),
+    EMBREE_ROW("embree-round", "Embree round *", EMB_ROUND_BEZIER, 0, 0, 0),
+};
+enum { VARIANT_COUNT = sizeof all_variants / sizeof all_variants[0] };
+
+/* The baseline of every ratio, and the rows of the ablation table (the
+   paper's three node policies, all with the default exact intersector). */
+#define BASELINE_KEY "embree-r4"
+static const char *const ablation_keys[] = {"aabb", "obb", "default"};
+static const char *const ablation_labels[] = {"AABB-only", "OBB-only", "mixed"};
+enum { ABLATION_ROWS = 3 };
+
+/* Named groups for --variants; "mixed" is the default variant by another name. */
+static const struct { const char *name, *members; } variant_groups[] = {
+    {"all", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,embree-r4,embree-r8,embree-r16,embree-round"},
+    {"hairobb", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb"},
+    {"embree", "embree-r4,embree-r8,embree-r16,embree-round"},
+    {"precision", "default,exact4,exact16,pieces4,pieces8,pieces16"},
+    {"ablation", "aabb,obb,default"},
+    {"mixed", "default"},
+};
+
+static int variant_index(const char *key)
+{
+    for (int i = 0; i < VARIANT_COUNT; i++)
+        if (strcmp(all_variants[i].key, key) == 0)
+            return i;
+    return -1;
+}
+
+/* Marks the variants named in a comma list (names or groups). Returns 0 on
+   success, else prints the unknown name and returns 1. */
+static int select_variants(const char *list, int selected[VARIANT_COUNT])
+{
+    char buffer[1024];
+    snprintf(buffer, sizeof buffer, "%s", list);
+    char *rest = NULL;
+    /* strtok_r: the group expansion below recurses */
+    for (char *name = strtok_r(buffer, ",", &rest); name; name = strtok_r(NULL, ",", &rest)) {
+        int found = 0;
+        for (size_t g = 0; g < sizeof variant_groups / sizeof variant_groups[0]; g++)
+            if (strcmp(variant_groups[g].name, name) == 0) {
+                found = 1;
+                if (select_variants(variant_groups[g].members, selected) != 0)
+                    return 1;
+            }
+        int index = variant_index(name);
+        if (index >= 0) {
+            selected[index] = 1;
+            found = 1;
+        }
+        if (!found) {
+            fprintf(stderr, "bench: unknown variant '%s' (see --help)\n", name);
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* ======================================================================== */
+/* Rays, hits and tracers                                                   */
+/* ======================================================================== */
+
+/* Structure of arrays so that every tracer reads the very same floats. All
+   rays start at tnear = 0: secondary rays are offset off the surface. */
+typedef struct ray_set {
+    ray_kind kind;
+    size_t count;
+    float *org, *dir; /* 3 floats per ray */
+    float *tfar;
+} ray_set;
+
+#define NO_HIT 0xffffffffu
+
+typedef struct hit_record {
+    float t, u;
+    float ng[3];   /* only hairobb reports a normal; secondary rays need it */
+    uint32_t prim; /* NO_HIT on a miss; any-hit queries write 0 when occluded */
+} hit_record;
+
+/* One acceleration structure behind two per-ray functions. One indirect
+   call per ray costs a few ns against hundreds for the trace itself. */
+typedef struct tracer {
+    const void *accel;
+    int (*intersect)(const void *accel, const float org[3], const float dir[3], float tfar, hit_record *hit);
+    int (*occluded)(const void *accel, const float org[3], const float dir[3], float tfar);
+} tracer;
+
+static int hairobb_tracer_intersect(const void *accel, const float org[3], const float dir[3], float tfar,
+                                    hit_record *out)
+{
+    hairobb_ray ray;
+    hairobb_hit hit;
+    memcpy(ray.org, org, sizeof ray.org);
+    memcpy(ray.dir, dir, sizeof ray.dir);
+    ray.tnear = 0.0f;
+    ray.tfar = tfar;
+    if (!hairobb_intersect1((const hairobb_bvh *)accel, &ray, &hit)) {
+        out->prim = NO_HIT;
+        return 0;
+    }
+    out->t = hit.t;
+    out->u = hit.u;
+    memcpy(out->ng, hit.Ng, sizeof out->ng);
+    out->prim = hit.prim_id;
+    return 1;
+}
+
+static int hairobb_tracer_occluded(const void *accel, const float org[3], const float dir[3], float tfar)
+{
+    hairobb_ray ray;
+    memcpy(ray.org, org, sizeof ray.org);
+    memcpy(ray.dir, dir, sizeof ray.dir);
+    ray.tnear = 0.0f;
+    ray.tfar = tfar;
+    return hairobb_occluded1((const hairobb_bvh *)accel, &ray);
+}
+
+static int embree_tracer_intersect(const void *accel, const float org[3], const float dir[3], float tfar,
+                                   hit_record *out)
+{
+    if (!emb_intersect((const emb_scene *)accel, org, 0.0f, dir, tfar, &out->t, &out->u, NULL, &out->prim)) {
+        out->prim = NO_HIT;
+        return 0;
+    }
+    out->ng[0] = out->ng[1] = out->ng[2] = 0.0f;
+    return 1;
+}
+
+static int embree_tracer_occluded(const void *accel, const float org[3], const float dir[3], float tfar)
+{
+    return emb_occluded((const emb_scene *)accel, org, 0.0f, dir, tfar);
+}
+
+static tracer hairobb_tracer(const hairobb_bvh *bvh)
+{
+    tracer t = {bvh, hairobb_tracer_intersect, hairobb_tracer_occluded};
+    return t;
+}
+
+static tracer embree_tracer(const emb_scene *scene)
+{
+    tracer t = {scene, embree_tracer_intersect, embree_tracer_occluded};
+    return t;
+}
+
+/* ======================================================================== */
+/* Parallel loop and timing harness                                         */
+/* ======================================================================== */
+
+/* Runs work(context, begin, end) over [0, count) in blocks of RAY_BLOCK,
+   block b on thread b % thread_count: interleaving spreads the expensive
+   image regions (the hair) evenly, without any shared counter. */
+typedef void (*block_work)(void *context, size_t begin, size_t end);
+
+typedef struct worker {
+    block_work work;
+    void *context;
+    size_t count;
+    unsigned index, thread_count;
+} worker;
+
+static void *worker_run(void *argument)
+{
+    const worker *w = (const worker *)argument;
+    for (size_t begin = (size_t)w->index * RAY_BLOCK; begin < w->count;
+         begin += (size_t)w->thread_count * RAY_BLOCK) {
+        size_t end = begin + RAY_BLOCK < w->count ? begin + RAY_BLOCK : w->count;
+        w->work(w->context, begin, end);
+    }
+    return NULL;
+}
+
+static void parallel_for(size_t count, unsigned thread_count, block_work work, void *context)
+{
+    pthread_t threads[256];
+    worker workers[256];
+    if (thread_count < 1)
+        thread_count = 1;
+    if (thread_count > 256)
+        thread_count = 256;
+    unsigned started = 1;
+    for (unsigned i = 0; i < thread_count; i++) {
+        worker w = {work, context, count, i, thread_count};
+        workers[i] = w;
+    }
+    /* the calling thread is worker 0; if a thread cannot start, the rays it
+       would have traced are traced by a second round on this thread */
+    for (unsigned i = 1; i < thread_count; i++, started++)
+        if (pthread_create(&threads[i], NULL, worker_run, &workers[i]) != 0)
+            break;
+    worker_run(&workers[0]);
+    for (unsigned i = 1; i < started; i++)
+        pthread_join(threads[i], NULL);
+    for (unsigned i = started; i < thread_count; i++)
+        worker_run(&workers[i]);
+}
+
+typedef struct trace_context {
+    const tracer *tracer;
+    const ray_set *rays;
+    hit_record *hits;
+} trace_context;
+
+static void trace_block(void *context, size_t begin, size_t end)
+{
+    const trace_context *c = (const trace_context *)context;
+    const ray_set *r = c->rays;
+    if (r->kind == RAYS_SHADOW) {
+        for (size_t i = begin; i < end; i++)
+            c->hits[i].prim = c->tracer->occluded(c->tracer->accel, r->org + 3 * i, r->dir + 3 * i, r->tfar[i])
+                                  ? 0 : NO_HIT;
+    } else {
+        for (size_t i = begin; i < end; i++)
+            c->tracer->intersect(c->tracer->accel, r->org + 3 * i, r->dir + 3 * i, r->tfar[i], &c->hits[i]);
+    }
+}
+
+/* Traces the whole ray set once; returns wall seconds. */
+static double trace_pass(const tracer *t, const ray_set *rays, hit_record *hits, unsigned thread_count)
+{
+    trace_context context = {t, rays, hits};
+    double start = scene_now();
+    parallel_for(rays->count, thread_count, trace_block, &context);
+    return scene_now() - start;
+}
+
+static int compare_doubles(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* One warm-up pass (caches, page faults, Embree's lazy setup), then the
+   median of `passes` timed passes, in millions of rays per second. */
+static double measure_mrays(const tracer *t, const ray_set *rays, hit_record *hits, unsigned thread_count,
+                            int passes)
+{
+    double seconds[64];
+    if (rays->count == 0)
+        return NAN;
+    if (passes > 64)
+        passes = 64;
+    trace_pass(t, rays, hits, thread_count);
+    for (int p = 0; p < passes; p++)
+        seconds[p] = trace_pass(t, rays, hits, thread_count);
+    qsort(seconds, (size_t)passes, sizeof seconds[0], compare_doubles);
+    double median = passes % 2 ? seconds[passes / 2] : 0.5 * (seconds[passes / 2 - 1] + seconds[passes / 2]);
+    return (double)rays->count / median * 1e-6;
+}
+
+/* ======================================================================== */
+/* Scenes and ray sets                                                      */
+/* ======================================================================== */
+
+/* Returns 0 on success, -1 when a file-based scene is absent (skipped), 1 on
+   errors, 2 for an unknown name (reported here). */
+static int load_scene(const options *o, const char *name, hair_scene *s)
+{
+    if (strcmp(name, "combed") == 0)
+        return scene_combed(s, o->segments, 1);
+    if (strcmp(name, "curly") == 0)
+        return scene_curly(s, o->segments, 2);
+    if (strcmp(name, "random") == 0)
+        return scene_random(s, o->segments, 3);
+    if (strcmp(name, "crossing") == 0)
+        return scene_crossing(s, o->segments, 4);
+    if (strcmp(name, "straight") == 0)
+        return scene_load_hair(s, o->straight_path);
+    if (strcmp(name, "furball") == 0)
+        return scene_load_furball(s, o->furball_path);
+    if (!strchr(name, '/') && !strchr(name, '.')) {
+        fprintf(stderr, "bench: unknown scene '%s' (see --help; a file needs a path or the .hair extension)\n", name);
+        return 2;
+    }
+    return scene_load_hair(s, name);
+}
+
+static int ray_set_alloc(ray_set *r, ray_kind kind, size_t count)
+{
+    r->kind = kind;
+    r->count = count;
+    size_t n = count ? count : 1;
+    r->org = (float *)malloc(3 * n * sizeof(float));
+    r->dir = (float *)malloc(3 * n * sizeof(float));
+    r->tfar = (float *)malloc(n * sizeof(float));
+    return !r->org || !r->dir || !r->tfar;
+}
+
+static void ray_set_free(ray_set *r)
+{
+    free(r->org);
+    free(r->dir);
+    free(r->tfar);
+    memset(r, 0, sizeof *r);
+}
+
+static int primary_rays(const hair_scene *s, int resolution, ray_set *rays)
+{
+    if (ray_set_alloc(rays, RAYS_PRIMARY, (size_t)resolution * (size_t)resolution) != 0)
+        return 1;
+    scene_camera_rays(s, resolution, resolution, rays->org, rays->dir);
+    for (size_t i = 0; i < rays->count; i++)
+        rays->tfar[i] = INFINITY;
+    return 0;
+}
+
+static float scene_diagonal(const hair_scene *s)
+{
+    scene_vec3 extent = scene_v3(s->upper[0] - s->lower[0], s->upper[1] - s->lower[1], s->upper[2] - s->lower[2]);
+    return scene_v3_length(extent);
+}
+
+/* Fixed point light above, right of and in front of the hair, outside its
+   bounding sphere, so that shadow rays cross the hair volume. */
+static scene_vec3 light_position(const hair_scene *s)
+{
+    scene_vec3 centre = scene_v3(0.5f * (s->lower[0] + s->upper[0]), 0.5f * (s->lower[1] + s->upper[1]),
+                                 0.5f * (s->lower[2] + s->upper[2]));
+    scene_vec3 toward = scene_v3_normalize(scene_v3(0.4f, 1.0f, 0.6f));
+    return scene_v3_add(centre, scene_v3_scale(toward, scene_diagonal(s)));
+}
+
+/* Cosine-distributed direction about the unit normal n. */
+static scene_vec3 cosine_direction(scene_vec3 n, scene_rng *rng)
+{
+    float phi = 6.28318531f * scene_rng_float(rng);
+    float r2 = scene_rng_float(rng);
+    float sin_theta = sqrtf(r2), cos_theta = sqrtf(1.0f - r2);
+    scene_vec3 tangent = scene_v3_perpendicular(n);
+    scene_vec3 bitangent = scene_v3_cross(n, tangent);
+    return scene_v3_normalize(scene_v3_add(scene_v3_scale(n, cos_theta),
+                                           scene_v3_add(scene_v3_scale(tangent, sin_theta * cosf(phi)),
+                                                        scene_v3_scale(bitangent, sin_theta * sinf(phi)))));
+}
+
+/* From every primary hit: one diffuse bounce and one shadow ray. Both start
+   at the hit point pushed off the ribbon along Ng by 1e-3 of the scene's
+   diagonal (over the hair radius in the procedural scenes), so neither
+   library finds the surface the ray left. */
+static int secondary_rays(const hair_scene *s, const ray_set *primary, const hit_record *hits, ray_set *incoherent,
+                          ray_set *shadow)
+{
+    size_t count = 0;
+    for (size_t i = 0; i < primary->count; i++)
+        count += hits[i].prim != NO_HIT;
+    if (ray_set_alloc(incoherent, RAYS_INCOHERENT, count) != 0 || ray_set_alloc(shadow, RAYS_SHADOW, count) != 0)
+        return 1;
+    float epsilon = 1e-3f * scene_diagonal(s);
+    scene_vec3 light = light_position(s);
+    scene_rng rng;
+    scene_rng_seed(&rng, 12345);
+    size_t k = 0;
+    for (size_t i = 0; i < primary->count; i++) {
+        const hit_record *h = &hits[i];
+        if (h->prim == NO_HIT)
+            continue;
+        const float *o = primary->org + 3 * i, *d = primary->dir + 3 * i;
+        scene_vec3 ng = scene_v3(h->ng[0], h->ng[1], h->ng[2]);
+        scene_vec3 p = scene_v3(o[0] + h->t * d[0], o[1] + h->t * d[1], o[2] + h->t * d[2]);
+        p = scene_v3_add(p, scene_v3_scale(ng, epsilon));
+
+        scene_vec3 bounce = cosine_direction(ng, &rng);
+        scene_vec3 to_light = scene_v3_sub(light, p);
+        float distance = scene_v3_length(to_light);
+        to_light = scene_v3_scale(to_light, 1.0f / distance);
+        float origin[3] = {p.x, p.y, p.z};
+        memcpy(incoherent->org + 3 * k, origin, sizeof origin);
+        memcpy(shadow->org + 3 * k, origin, sizeof origin);
+        float bounce_dir[3] = {bounce.x, bounce.y, bounce.z}, light_dir[3] = {to_light.x, to_light.y, to_light.z};
+        memcpy(incoherent->dir + 3 * k, bounce_dir, sizeof bounce_dir);
+        memcpy(shadow->dir + 3 * k, light_dir, sizeof light_dir);
+        incoherent->tfar[k] = INFINITY;
+        shadow->tfar[k] = distance;
+        k++;
+    }
+    return 0;
+}
+
+/* ======================================================================== */
+/* Accuracy                                                                 */
+/* ======================================================================== */
+
+/* The reference's answers on a fixed random subset of the primary rays. */
+typedef struct accuracy_set {
+    ray_set rays;      /* copies of the chosen primary rays */
+    ref_hit *ref;
+    int *ref_hits;
+    double seconds;    /* reference build + trace */
+} accuracy_set;
+
+typedef struct accuracy_summary {
+    size_t rays, disagreements, t_compared, u_compared;
+    double t_median, t_p99, t_max; /* |t - t_ref| / r_ref where both hit */
+    double u_median, u_p99;        /* |u - u_ref| where both hit the same segment */
+} accuracy_summary;
+
+typedef struct reference_context {
+    const ref_scene *scene;
+    accuracy_set *set;
+} reference_context;
+
+static void reference_block(void *context, size_t begin, size_t end)
+{
+    reference_context *c = (reference_context *)context;
+    for (size_t i = begin; i < end; i++)
+        c->set->ref_hits[i] = ref_intersect(c->scene, c->set->rays.org + 3 * i, c->set->rays.dir + 3 * i, 0.0,
+                                            INFINITY, &c->set->ref[i]);
+}
+
+/* Picks `wanted` distinct primary rays with a fixed seed (partial
+   Fisher-Yates), copies them and traces them with the reference only. */
+static int accuracy_prepare(const hair_scene *s, const ray_set *primary, size_t wanted, unsigned thread_count,
+                            accuracy_set *a)
+{
+    memset(a, 0, sizeof *a);
+    size_t n = wanted < primary->count ? wanted : primary->count;
+    uint32_t *order = (uint32_t *)malloc((primary->count ? primary->count : 1) * sizeof(uint32_t));
+    a->ref = (ref_hit *)malloc((n ? n : 1) * sizeof(ref_hit));
+    a->ref_hits = (int *)malloc((n ? n : 1) * sizeof(int));
+    if (!order || !a->ref || !a->ref_hits || ray_set_alloc(&a->rays, RAYS_PRIMARY, n) != 0) {
+        free(order);
+        return 1;
+    }
+    for (size_t i = 0; i < primary->count; i++)
+        order[i] = (uint32_t)i;
+    scene_rng rng;
+    scene_rng_seed(&rng, 777);
+    for (size_t i = 0; i < n; i++) {
+        size_t j = i + (size_t)(((uint64_t)scene_rng_u32(&rng) * (primary->count - i)) >> 32);
+        uint32_t chosen = order[j];
+        order[j] = order[i];
+        order[i] = chosen;
+        memcpy(a->rays.org + 3 * i, primary->org + 3 * (size_t)chosen, 3 * sizeof(float));
+        memcpy(a->rays.dir + 3 * i, primary->dir + 3 * (size_t)chosen, 3 * sizeof(float));
+        a->rays.tfar[i] = primary->tfar[chosen];
+    }
+    free(order);
+
+    double start = scene_now();
+    ref_scene *reference = ref_build(s->vertices, s->vertex_count, s->indices, s->segment_count);
+    if (!reference)
+        return 1;
+    reference_context context = {reference, a};
+    parallel_for(n, thread_count, reference_block, &context);
+    ref_free(reference);
+    a->seconds = scene_now() - start;
+    return 0;
+}
+
+static void accuracy_free(accuracy_set *a)
+{
+    ray_set_free(&a->rays);
+    free(a->ref);
+    free(a->ref_hits);
+    memset(a, 0, sizeof *a);
+}
+
+/* Nearest-rank percentile of a sorted array. */
+static double percentile(const double *sorted, size_t n, double p)
+{
+    return n ? sorted[(size_t)(p * (double)(n - 1) + 0.5)] : NAN;
+}
+
+static int accuracy_measure(const tracer *t, const accuracy_set *a, accuracy_summary *out)
+{
+    size_t n = a->rays.count;
+    memset(out, 0, sizeof *out);
+    hit_record *hits = (hit_record *)malloc((n ? n : 1) * sizeof(hit_record));
+    double *t_errors = (double *)malloc((n ? n : 1) * sizeof(double));
+    double *u_errors = (double *)malloc((n ? n : 1) * sizeof(double));
+    if (!hits || !t_errors || !u_errors) {
+        free(hits);
+        free(t_errors);
+        free(u_errors);
+        return 1;
+    }
+    trace_pass(t, &a->rays, hits, 1);
+    out->rays = n;
+    for (size_t i = 0; i < n; i++) {
+        int hit = hits[i].prim != NO_HIT;
+        const ref_hit *ref = &a->ref[i];
+        if (hit != a->ref_hits[i]) {
+            out->disagreements++;
+            continue;
+        }
+        if (!hit)
+            continue;
+        if (ref->r > 0.0)
+            t_errors[out->t_compared++] = fabs((double)hits[i].t - ref->t) / ref->r;
+        /* u on another segment is a different curve's parameter */
+        if (hits[i].prim == ref->prim_id)
+            u_errors[out->u_compared++] = fabs((double)hits[i].u - ref->u);
+    }
+    qsort(t_errors, out->t_compared, sizeof(double), compare_doubles);
+    qsort(u_errors, out->u_compared, sizeof(double), compare_doubles);
+    out->t_median = percentile(t_errors, out->t_compared, 0.5);
+    out->t_p99 = percentile(t_errors, out->t_compared, 0.99);
+    out->t_max = percentile(t_errors, out->t_compared, 1.0);
+    out->u_median = percentile(u_errors, out->u_compared, 0.5);
+    out->u_p99 = percentile(u_errors, out->u_compared, 0.99);
+    free(hits);
+    free(t_errors);
+    free(u_errors);
+    return 0;
+}
+
+static double disagreement_percent(const accuracy_summary *a)
+{
+    return a->rays ? 100.0 * (double)a->disagreements / (double)a->rays : NAN;
+}
+
+/* ======================================================================== */
+/* Running one variant                                                      */
+/* ======================================================================== */
+
+typedef struct variant_result {
+    int measured;
+    double build_seconds;
+    size_t memory_bytes;
+    hairobb_stats stats;   /* hairobb only */
+    double mrays[RAY_KIND_COUNT][MAX_THREAD_COUNTS]; /* NAN when not measured */
+    int has_accuracy;
+    accuracy_summary accuracy;
+} variant_result;
+
+typedef struct scene_result {
+    char name[64];
+    size_t segment_count;
+    size_t ray_counts[RAY_KIND_COUNT];
+    int loaded;
+    variant_result variants[VARIANT_COUNT];
+} scene_result;
+
+/* Everything a scene's variants share: the geometry and the rays. */
+typedef struct workload {
+    hair_scene scene;
+    ray_set rays[RAY_KIND_COUNT];
+    hit_record *hits;      /* output buffer, sized for the largest ray set */
+    size_t primary_hits;
+    int has_accuracy;
+    accuracy_set accuracy;
+    /* The default variant's BVH, built to spawn the secondary rays and kept
+       for that variant's row: at tens of millions of segments a build takes
+       minutes, too long to do twice. NULL once adopted. */
+    hairobb_bvh *default_bvh;
+    double default_build_seconds;
+} workload;
+
+/* An acceleration structure built for one variant. */
+typedef struct built_accel {
+    hairobb_bvh *bvh;
+    emb_scene *embree;
+    tracer tracer;
+} built_accel;
+
+static hairobb_bvh *build_hairobb(const hair_scene *s, const variant *v, double *seconds)
+{
+    hairobb_build_options build_options;
+    memset(&build_options, 0, sizeof build_options);
+    build_options.nodes = v->nodes;
+    build_options.precision = v->precision;
+    build_options.curve_pieces = v->curve_pieces;
+    hairobb_bvh *bvh = NULL;
+    double start = scene_now();
+    hairobb_result result =
+        hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, &build_options, &bvh);
+    *seconds = scene_now() - start;
+    if (result != HAIROBB_OK)
+        fprintf(stderr, "bench: %s: hairobb_build (%s): %s\n", s->name, v->key, hairobb_result_string(result));
+    return bvh;
+}
+
+static int build_variant(workload *w, const variant *v, built_accel *b, variant_result *r)
+{
+    const hair_scene *s = &w->scene;
+    memset(b, 0, sizeof *b);
+    if (v->lib == LIB_HAIROBB) {
+        if (w->default_bvh && v == &all_variants[variant_index("default")]) {
+            b->bvh = w->default_bvh;
+            r->build_seconds = w->default_build_seconds;
+            w->default_bvh = NULL;
+        } else {
+            b->bvh = build_hairobb(s, v, &r->build_seconds);
+        }
+        if (!b->bvh)
+            return 1;
+        r->memory_bytes = hairobb_memory_bytes(b->bvh);
+        hairobb_get_stats(b->bvh, &r->stats);
+        b->tracer = hairobb_tracer(b->bvh);
+    } else {
+        /* threads 0: Embree builds on every core, as it would in a renderer */
+        b->embree = emb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, v->embree_type,
+                              v->embree_rate, 0, &r->memory_bytes, &r->build_seconds);
+        if (!b->embree)
+            return 1;
+        b->tracer = embree_tracer(b->embree);
+    }
+    return 0;
+}
+
+static void free_variant(built_accel *b)
+{
+    hairobb_free(b->bvh);
+    emb_free(b->embree);
+    memset(b, 0, sizeof *b);
+}
+
+static void run_variant(const options *o, workload *w, const variant *v, variant_result *r)
+{
+    built_accel accel;
+    for (int k = 0; k < RAY_KIND_COUNT; k++)
+        for (int t = 0; t < MAX_THREAD_COUNTS; t++)
+            r->mrays[k][t] = NAN;
+    progress_start("  %s: build", v->label);
+    if (build_variant(w, v, &accel, r) != 0) {
+        progress("failed");
+        return;
+    }
+    progress("%.2f s", r->build_seconds);
+    r->measured = 1;
+    for (int k = 0; k < RAY_KIND_COUNT; k++) {
+        if (!o->ray_kind_enabled[k] || w->rays[k].count == 0)
+            continue;
+        for (int t = 0; t < o->thread_count_count; t++) {
+            progress_start("  %s: %s rays, %u thread%s", v->label, ray_kind_names[k], o->thread_counts[t],
+                           o->thread_counts[t] == 1 ? "" : "s");
+            r->mrays[k][t] = measure_mrays(&accel.tracer, &w->rays[k], w->hits, o->thread_counts[t], o->passes);
+            progress("%.2f Mrays/s", r->mrays[k][t]);
+        }
+    }
+    if (w->has_accuracy) {
+        progress_start("  %s: accuracy", v->label);
+        r->has_accuracy = accuracy_measure(&accel.tracer, &w->accuracy, &r->accuracy) == 0;
+        progress("%s", r->has_accuracy ? "done" : "out of memory");
+    }
+    free_variant(&accel);
+}
+
+/* ======================================================================== */
+/* Scene workload                                                           */
+/* ======================================================================== */
+
+static unsigned max_threads(const options *o)
+{
+    unsigned most = 1;
+    for (int t = 0; t < o->thread_count_count; t++)
+        most = o->thread_counts[t] > most ? o->thread_counts[t] : most;
+    return most;
+}
+
+/* Secondary rays start where the default hairobb BVH's primary rays hit:
+   built and traced here once, so that every variant (Embree included)
+   traces the very same secondary rays. The BVH is kept for the default
+   variant if it is selected. */
+static int spawn_secondary_rays(const options *o, workload *w, int keep_bvh)
+{
+    const variant *v = &all_variants[variant_index("default")];
+    hairobb_bvh *bvh = build_hairobb(&w->scene, v, &w->default_build_seconds);
+    if (!bvh)
+        return 1;
+    tracer t = hairobb_tracer(bvh);
+    trace_pass(&t, &w->rays[RAYS_PRIMARY], w->hits, max_threads(o));
+    if (keep_bvh)
+        w->default_bvh = bvh;
+    else
+        hairobb_free(bvh);
+    w->primary_hits = 0;
+    for (size_t i = 0; i < w->rays[RAYS_PRIMARY].count; i++)
+        w->primary_hits += w->hits[i].prim != NO_HIT;
+    return secondary_rays(&w->scene, &w->rays[RAYS_PRIMARY], w->hits, &w->rays[RAYS_INCOHERENT],
+                          &w->rays[RAYS_SHADOW]);
+}
+
+static void workload_free(workload *w)
+{
+    for (int k = 0; k < RAY_KIND_COUNT; k++)
+        ray_set_free(&w->rays[k]);
+    free(w->hits);
+    hairobb_free(w->default_bvh);
+    accuracy_free(&w->accuracy);
+    scene_free(&w->scene);
+}
+
+/* Primary rays, the reference's answers on the accuracy subset, then the
+   secondary rays (in that order: the reference, the largest allocation, is
+   freed before the default BVH is built and kept). */
+static int workload_prepare(const options *o, const int selected[VARIANT_COUNT], workload *w)
+{
+    progress("%s: primary rays (%dx%d)", w->scene.name, o->resolution, o->resolution);
+    if (primary_rays(&w->scene, o->resolution, &w->rays[RAYS_PRIMARY]) != 0)
+        return 1;
+    /* secondary rays are at most one per primary ray */
+    w->hits = (hit_record *)malloc((w->rays[RAYS_PRIMARY].count ? w->rays[RAYS_PRIMARY].count : 1) *
+                                   sizeof(hit_record));
+    if (!w->hits)
+        return 1;
+    if (o->accuracy_rays > 0) {
+        progress_start("%s: reference on %zu primary rays", w->scene.name, o->accuracy_rays);
+        if (accuracy_prepare(&w->scene, &w->rays[RAYS_PRIMARY], o->accuracy_rays, max_threads(o), &w->accuracy) !=
+            0) {
+            progress("failed");
+            fprintf(stderr, "bench: %s: reference failed (out of memory?)\n", w->scene.name);
+            return 1;
+        }
+        progress("%.2f s", w->accuracy.seconds);
+        w->has_accuracy = 1;
+    }
+    if (o->ray_kind_enabled[RAYS_INCOHERENT] || o->ray_kind_enabled[RAYS_SHADOW]) {
+        progress_start("%s: secondary rays from the default hairobb BVH's primary hits", w->scene.name);
+        if (spawn_secondary_rays(o, w, selected[variant_index("default")]) != 0) {
+            progress("failed");
+            return 1;
+        }
+        progress("build %.2f s", w->default_build_seconds);
+    }
+    return 0;
+}
+
+/* ======================================================================== */
+/* Tables                                                                   */
+/* ======================================================================== */
+
+/* "value (ratio x)" against the Embree flat r4 row; "-" when unmeasured. */
+static const char *with_ratio(char *buffer, size_t size, const char *format, double value, double baseline)
+{
+    char number[32];
+    if (!isfinite(value)) {
+        snprintf(buffer, size, "-");
+        return buffer;
+    }
+    snprintf(number, sizeof number, format, value);
+    if (isfinite(baseline) && baseline > 0.0)
+        snprintf(buffer, size, "%s (%.2fx)", number, value / baseline);
+    else
+        snprintf(buffer, size, "%s", number);
+    return buffer;
+}
+
+static const variant_result *baseline_of(const scene_result *sr)
+{
+    const variant_result *b = &sr->variants[variant_index(BASELINE_KEY)];
+    return b->measured ? b : NULL;
+}
+
+static void print_scene_header(const options *o, const workload *w)
+{
+    const hair_scene *s = &w->scene;
+    printf("\n=== scene %s: %zu segments, bounds (%.3g %.3g %.3g)-(%.3g %.3g %.3g)\n", s->name, s->segment_count,
+           s->lower[0], s->lower[1], s->lower[2], s->upper[0], s->upper[1], s->upper[2]);
+    printf("rays: primary %zu (%dx%d pinhole)", w->rays[RAYS_PRIMARY].count, o->resolution, o->resolution);
+    if (w->rays[RAYS_INCOHERENT].count || w->rays[RAYS_SHADOW].count)
+        printf(", %.1f%% hit by default hairobb; incoherent %zu (diffuse bounce), shadow %zu (point light)",
+               100.0 * (double)w->primary_hits / (double)w->rays[RAYS_PRIMARY].count,
+               w->rays[RAYS_INCOHERENT].count, w->rays[RAYS_SHADOW].count);
+    printf("\n");
+    if (w->has_accuracy) {
+        size_t ref_hits = 0;
+        for (size_t i = 0; i < w->accuracy.rays.count; i++)
+            ref_hits += (size_t)w->accuracy.ref_hits[i];
+        printf("accuracy: %zu random primary rays, %zu hit the reference (reference build + trace %.2f s)\n",
+               w->accuracy.rays.count, ref_hits, w->accuracy.seconds);
+    }
+}
+
+static void print_build_table(const scene_result *sr, const int selected[VARIANT_COUNT])
+{
+    const variant_result *base = baseline_of(sr);
+    char c1[48], c2[48], c3[48];
+    printf("\nbuild and memory (ratios: this / Embree flat r4; hairobb builds on 1 thread, Embree on all)\n");
+    printf("%-20s %-18s %-18s %-18s %s\n", "variant", "build s", "MB", "bytes/segment",
+           "AABB/OBB nodes, leaves, segments/leaf, depth");
+    for (int i = 0; i < VARIANT_COUNT; i++) {
+        const variant_result *r = &sr->variants[i];
+        if (!selected[i] || !r->measured)
+            continue;
+        double bytes_per_segment = (double)r->memory_bytes / (double)sr->segment_count;
+        printf("%-20s %-18s %-18s %-18s", all_variants[i].label,
+               with_ratio(c1, sizeof c1, "%.3f", r->build_seconds, base ? base->build_seconds : NAN),
+               with_ratio(c2, sizeof c2, "%.1f", (double)r->memory_bytes / 1048576.0,
+                          base ? (double)base->memory_bytes / 1048576.0 : NAN),
+               with_ratio(c3, sizeof c3, "%.1f", bytes_per_segment,
+                          base ? (double)base->memory_bytes / (double)sr->segment_count : NAN));
+        if (all_variants[i].lib == LIB_HAIROBB)
+            printf(" %zu/%zu, %zu, %.2f, %u", r->stats.aabb_nodes, r->stats.obb_nodes, r->stats.leaves,
+                   r->stats.leaves ? (double)r->stats.leaf_references / (double)r->stats.leaves : 0.0,
+                   r->stats.max_depth);
+        printf("\n");
+    }
+}
+
+static void print_speed_table(const options *o, const scene_result *sr, const int selected[VARIANT_COUNT])
+{
+    const variant_result *base = baseline_of(sr);
+    char cell[48], heading[48];
+    printf("\nMrays/s, median of %d pass%s (ratios: this / Embree flat r4)\n", o->passes, o->passes == 1 ? "" : "es");
+    printf("%-20s", "variant");
+    for (int k = 0; k < RAY_KIND_COUNT; k++)
+        for (int t = 0; t < o->thread_count_count && o->ray_kind_enabled[k]; t++) {
+            snprintf(heading, sizeof heading, "%s %ut", ray_kind_names[k], o->thread_counts[t]);
+            printf(" %-15s", heading);
+        }
+    printf("\n");
+    for (int i = 0; i < VARIANT_COUNT; i++) {
+        const variant_result *r = &sr->variants[i];
+        if (!selected[i] || !r->measured)
+            continue;
+        printf("%-20s", all_variants[i].label);
+        for (int k = 0; k < RAY_KIND_COUNT; k++)
+            for (int t = 0; t < o->thread_count_count && o->ray_kind_enabled[k]; t++)
+                printf(" %-15s", with_ratio(cell, sizeof cell, "%.2f", r->mrays[k][t], base ? base->mrays[k][t] : NAN));
+        printf("\n");
+    }
+}
+
+static void print_accuracy_table(const workload *w, const scene_result *sr, const int selected[VARIANT_COUNT])
+{
+    int any_informative = 0;
+    if (!w->has_accuracy)
+        return;
+    printf("\naccuracy on %zu primary rays against the double-precision reference ribbon\n",
+           w->accuracy.rays.count);
+    printf("%-20s %-17s %-10s %-10s %-10s %-10s %-10s\n", "variant", "disagree", "|dt|/r med", "|dt|/r p99",
+           "|dt|/r max", "|du| med", "|du| p99");
+    for (int i = 0; i < VARIANT_COUNT; i++) {
+        const variant_result *r = &sr->variants[i];
+        if (!selected[i] || !r->has_accuracy)
+            continue;
+        const accuracy_summary *a = &r->accuracy;
+        char disagree[32];
+        snprintf(disagree, sizeof disagree, "%.3f%% (%zu)", disagreement_percent(a), a->disagreements);
+        printf("%-20s %-17s %-10.2e %-10.2e %-10.2e %-10.2e %-10.2e\n", all_variants[i].label, disagree, a->t_median,
+               a->t_p99, a->t_max, a->u_median, a->u_p99);
+        any_informative |= !all_variants[i].accuracy_comparable;
+    }
+    if (any_informative)
+        printf("* round curves are swept spheres, not the reference's flat ribbon: informative, not comparable\n");
+}
+
+/* Rows AABB-only, OBB-only, mixed per scene, as in the paper's results
+   table (Woop et al. 2014): speed on primary and incoherent rays, memory
+   and build time. */
+static void print_ablation_table(const options *o, const scene_result *results, int scene_count,
+                                 const int selected[VARIANT_COUNT])
+{
+    int any = 0;
+    for (int a = 0; a < ABLATION_ROWS; a++)
+        any |= selected[variant_index(ablation_keys[a])];
+    if (!any)
+        return;
+    char heading[48];
+    printf("\n=== ablation: node types (exact intersector, 8 pieces)\n");
+    printf("%-12s %-10s", "scene", "nodes");
+    for (int k = RAYS_PRIMARY; k <= RAYS_INCOHERENT; k++)
+        for (int t = 0; t < o->thread_count_count && o->ray_kind_enabled[k]; t++) {
+            snprintf(heading, sizeof heading, "%s %ut", ray_kind_names[k], o->thread_counts[t]);
+            printf(" %-13s", heading);
+        }
+    printf(" %-8s %-9s %-8s %s\n", "MB", "bytes/seg", "build s", "OBB nodes %");
+    for (int s = 0; s < scene_count; s++) {
+        if (!results[s].loaded)
+            continue;
+        int first = 1;
+        for (int a = 0; a < ABLATION_ROWS; a++) {
+            int i = variant_index(ablation_keys[a]);
+            const variant_result *r = &results[s].variants[i];
+            if (!selected[i] || !r->measured)
+                continue;
+            printf("%-12s %-10s", first ? results[s].name : "", ablation_labels[a]);
+            first = 0;
+            for (int k = RAYS_PRIMARY; k <= RAYS_INCOHERENT; k++)
+                for (int t = 0; t < o->thread_count_count && o->ray_kind_enabled[k]; t++)
+                    printf(" %-13.2f", r->mrays[k][t]);
+            size_t inner = r->stats.aabb_nodes + r->stats.obb_nodes;
+            printf(" %-8.1f %-9.1f %-8.3f %.1f\n", (double)r->memory_bytes / 1048576.0,
+                   (double)r->memory_bytes / (double)results[s].segment_count, r->build_seconds,
+                   inner ? 100.0 * (double)r->stats.obb_nodes / (double)inner : 0.0);
+        }
+    }
+}
+
+/* The chart's points as a table: precision variants and Embree rates. */
+static void print_tradeoff_table(const options *o, const scene_result *results, int scene_count,
+                                 const int selected[VARIANT_COUNT], const char *chart_note)
+{
+    if (!o->ray_kind_enabled[RAYS_PRIMARY] || o->accuracy_rays == 0)
+        return;
+    printf("\n=== run time against error: primary rays, %u thread%s (%s)\n", o->thread_counts[0],
+           o->thread_counts[0] == 1 ? "" : "s", chart_note);
+    printf("%-12s %-20s %-10s %-12s %-10s\n", "scene", "variant", "Mrays/s", "disagree %", "|dt|/r p99");
+    for (int s = 0; s < scene_count; s++) {
+        if (!results[s].loaded)
+            continue;
+        int first = 1;
+        for (int i = 0; i < VARIANT_COUNT; i++) {
+            const variant_result *r = &results[s].variants[i];
+            if (!selected[i] || !all_variants[i].on_chart || !r->has_accuracy)
+                continue;
+            printf("%-12s %-20s %-10.2f %-12.4f %-10.2e\n", first ? results[s].name : "", all_variants[i].label,
+                   r->mrays[RAYS_PRIMARY][0], disagreement_percent(&r->accuracy), r->accuracy.t_p99);
+            first = 0;
+        }
+    }
+}
+
+/* ======================================================================== */
+/* TSV and chart                                                            */
+/* ======================================================================== */
+
+static void tsv_number(FILE *f, const char *format, double value)
+{
+    if (isfinite(value))
+        fprintf(f, format, value);
+    else
+        fputs("\tNaN", f); /* gnuplot skips NaN */
+}
+
+static FILE *tsv_open(const options *o)
+{
+    FILE *f = fopen(o->tsv_path, "w");
+    if (!f) {
+        fprintf(stderr, "bench: cannot write %s: %s\n", o->tsv_path, strerror(errno));
+        return NULL;
+    }
+    fputs("scene\tsegments\tvariant\tlabel\tlibrary\tnodes\tprecision\tcurve_pieces\tembree_rate"
+          "\tbuild_s\tmemory_bytes\tbytes_per_segment\taabb_nodes\tobb_nodes\tleaves\tleaf_references\tmax_depth",
+          f);
+    for (int k = 0; k < RAY_KIND_COUNT; k++)
+        fprintf(f, "\t%s_rays", ray_kind_names[k]);
+    for (int k = 0; k < RAY_KIND_COUNT; k++)
+        for (int t = 0; t < o->thread_count_count; t++)
+            fprintf(f, "\t%s_mrays_%ut", ray_kind_names[k], o->thread_counts[t]);
+    fputs("\taccuracy_rays\tdisagreements\tdisagree_pct\tdt_r_median\tdt_r_p99\tdt_r_max\tdu_median\tdu_p99"
+          "\taccuracy_comparable\tchart_series\n",
+          f);
+    return f;
+}
+
+static void tsv_write_scene(FILE *f, const options *o, const scene_result *sr, const int selected[VARIANT_COUNT])
+{
+    static const char *const node_names[] = {"mixed", "aabb", "obb"};
+    for (int i = 0; i < VARIANT_COUNT; i++) {
+        const variant *v = &all_variants[i];
+        const variant_result *r = &sr->variants[i];
+        if (!selected[i] || !r->measured)
+            continue;
+        int hairobb = v->lib == LIB_HAIROBB;
+        fprintf(f, "%s\t%zu\t%s\t%s\t%s\t%s\t%s\t%u\t%d", sr->name, sr->segment_count, v->key, v->label,
+                hairobb ? "hairobb" : "embree", hairobb ? node_names[v->nodes] : "-",
+                hairobb ? (v->precision == HAIROBB_PRECISION_EXACT ? "exact" : "pieces")
+                        : (v->embree_type == EMB_FLAT_BEZIER ? "flat" : "round"),
+                v->curve_pieces, v->embree_rate);
+        fprintf(f, "\t%.6f\t%zu\t%.3f\t%zu\t%zu\t%zu\t%zu\t%u", r->build_seconds, r->memory_bytes,
+                (double)r->memory_bytes / (double)sr->segment_count, r->stats.aabb_nodes, r->stats.obb_nodes,
+                r->stats.leaves, r->stats.leaf_references, r->stats.max_depth);
+        for (int k = 0; k < RAY_KIND_COUNT; k++)
+            fprintf(f, "\t%zu", sr->ray_counts[k]);
+        for (int k = 0; k < RAY_KIND_COUNT; k++)
+            for (int t = 0; t < o->thread_count_count; t++)
+                tsv_number(f, "\t%.4f", r->mrays[k][t]);
+        if (r->has_accuracy) {
+            const accuracy_summary *a = &r->accuracy;
+            fprintf(f, "\t%zu\t%zu", a->rays, a->disagreements);
+            tsv_number(f, "\t%.6g", disagreement_percent(a));
+            tsv_number(f, "\t%.6g", a->t_median);
+            tsv_number(f, "\t%.6g", a->t_p99);
+            tsv_number(f, "\t%.6g", a->t_max);
+            tsv_number(f, "\t%.6g", a->u_median);
+            tsv_number(f, "\t%.6g", a->u_p99);
+        } else {
+            fputs("\t0\t0\tNaN\tNaN\tNaN\tNaN\tNaN\tNaN", f);
+        }
+        fprintf(f, "\t%d\t%s\n", v->accuracy_comparable, v->on_chart ? (hairobb ? "hairobb" : "embree") : "-");
+    }
+    fflush(f);
+}
+
+/* A scene gets a row of the chart if some variant of the chart has both a
+   speed and an accuracy: the gnuplot script needs points to set its axes. */
+static int has_chart_points(const scene_result *sr, const int selected[VARIANT_COUNT])
+{
+    for (int i = 0; i < VARIANT_COUNT; i++) {
+        const variant_result *r = &sr->variants[i];
+        if (sr->loaded && selected[i] && all_variants[i].on_chart && r->has_accuracy &&
+            isfinite(r->mrays[RAYS_PRIMARY][0]))
+            return 1;
+    }
+    return 0;
+}
+
+/* Returns the path of an executable named `name` on PATH, in `found`. */
+static int find_on_path(const char *name, char *found, size_t size)
+{
+    const char *path = getenv("PATH");
+    while (path && *path) {
+        size_t length = strcspn(path, ":");
+        snprintf(found, size, "%.*s/%s", (int)length, path, name);
+        if (length > 0 && access(found, X_OK) == 0)
+            return 1;
+        path += length + (path[length] == ':');
+    }
+    return 0;
+}
+
+/* Draws the chart with gnuplot (run directly, no shell, so paths need no
+   quoting beyond gnuplot's own). Returns a note for the tables. */
+static const char *draw_chart(const options *o, const scene_result *results, int scene_count,
+                              const int selected[VARIANT_COUNT], char *note, size_t note_size)
+{
+    char gnuplot[4096], variables[4096], scenes[1024] = "";
+    for (int s = 0; s < scene_count; s++)
+        if (has_chart_points(&results[s], selected) && strlen(scenes) + strlen(results[s].name) + 2 < sizeof scenes)
+            snprintf(scenes + strlen(scenes), sizeof scenes - strlen(scenes), "%s%s", *scenes ? " " : "",
+                     results[s].name);
+    if (!find_on_path("gnuplot", gnuplot, sizeof gnuplot)) {
+        snprintf(note, note_size, "gnuplot not on PATH: no chart drawn");
+        return note;
+    }
+    if (!*scenes) {
+        snprintf(note, note_size, "no chart: it needs primary rays, accuracy rays and a precision or Embree flat "
+                                  "variant");
+        return note;
+    }
+    if (access(o->plot_script, R_OK) != 0) {
+        snprintf(note, note_size, "no chart: cannot read %s (run from the repository root or pass --plot-script)",
+                 o->plot_script);
+        return note;
+    }
+    snprintf(variables, sizeof variables, "tsv='%s'; out='%s'; scenes='%s'; speed='primary_mrays_%ut'; threads=%u",
+             o->tsv_path, o->png_path, scenes, o->thread_counts[0], o->thread_counts[0]);
+    fflush(stdout);
+    pid_t child = fork();
+    if (child == 0) {
+        execl(gnuplot, "gnuplot", "-e", variables, o->plot_script, (char *)NULL);
+        _exit(127);
+    }
+    int status = 0;
+    if (child < 0 || waitpid(child, &status, 0) < 0 || !WIFEXITED(status) || WEXITSTATUS(status) != 0)
+        snprintf(note, note_size, "gnuplot failed: no chart");
+    else
+        snprintf(note, note_size, "chart: %s", o->png_path);
+    return note;
+}
+
+/* ======================================================================== */
+/* Machine description                                                      */
+/* ======================================================================== */
+
+static void cpu_model(char *model, size_t size)
+{
+    char line[512];
+    snprintf(model, size, "unknown");
+    FILE *f = fopen("/proc/cpuinfo", "r");
+    if (!f)
+        return;
+    while (fgets(line, sizeof line, f)) {
+        if (strncmp(line, "model name", 10) == 0) {
+            const char *value = strchr(line, ':');
+            if (value) {
+                value += 1 + strspn(value + 1, " \t");
+                snprintf(model, size, "%.*s", (int)strcspn(value, "\n"), value);
+            }
+            break;
+        }
+    }
+    fclose(f);
+}
+
+static void print_machine(const options *o)
+{
+    char model[256], date[64], threads[64] = "";
+    time_t now = time(NULL);
+    struct tm local;
+    cpu_model(model, sizeof model);
+    strftime(date, sizeof date, "%Y-%m-%d %H:%M:%S %Z", localtime_r(&now, &local));
+    for (int t = 0; t < o->thread_count_count; t++)
+        snprintf(threads + strlen(threads), sizeof threads - strlen(threads), "%s%u", t ? ", " : "",
+                 o->thread_counts[t]);
+    printf("hairobb benchmark, %s\n", date);
+    printf("cpu: %s, %ld logical cores; threads measured: %s\n", model, sysconf(_SC_NPROCESSORS_ONLN), threads);
+#if defined(__VERSION__) && defined(__GNUC__) && !defined(__clang__)
+    printf("compiler: gcc %s", __VERSION__); /* gcc's __VERSION__ is the bare number */
+#elif defined(__VERSION__)
+    printf("compiler: %s", __VERSION__);
+#else
+    printf("compiler: unknown");
+#endif
+#ifdef BENCH_CFLAGS
+    printf(", flags: %s", BENCH_CFLAGS);
+#else
+    printf(", flags: see Makefile (the $(B)/bench rule)");
+#endif
+#if defined(__AVX2__)
+    printf(", SIMD: AVX2\n");
+#elif defined(__AVX__)
+    printf(", SIMD: AVX\n");
+#elif defined(__SSE2__)
+    printf(", SIMD: SSE2\n");
+#else
+    printf(", SIMD: none\n");
+#endif
+    printf("hairobb %d.%d.%d, Embree %s; median of %d timed pass%s after 1 warm-up; blocks of %d rays "
+           "interleaved across threads\n",
+           HAIROBB_VERSION_MAJOR, HAIROBB_VERSION_MINOR, HAIROBB_VERSION_PATCH, RTC_VERSION_STRING, o->passes,
+           o->passes == 1 ? "" : "es", RAY_BLOCK);
+    /* other work on the machine skews the figures, the threaded ones most */
+    double load[3];
+    FILE *f = fopen("/proc/loadavg", "r");
+    if (f && fscanf(f, "%lf %lf %lf", &load[0], &load[1], &load[2]) == 3)
+        printf("load average before the run: %.2f %.2f %.2f (1, 5, 15 min)\n", load[0], load[1], load[2]);
+    if (f)
+        fclose(f);
+}
+
+/* ======================================================================== */
+/* Command line                                                             */
+/* ======================================================================== */
+
+static void print_help(void)
+{
+    printf("usage: build/bench [options]   (run from the repository root)\n"
+           "  --scene LIST        scenes, comma list or repeated (default combed):\n"
+           "                      combed, curly, random, crossing (procedural), straight (--straight-path),\n"
+           "                      furball (Embree's furBall_A, skipped if absent), or a PATH.hair file\n"
+           "  --segments N        segments of procedural scenes (default %d; k and M suffixes allowed)\n"
+           "  --res N             primary rays: N x N pinhole camera framing the hair (default %d)\n"
+           "  --rays LIST         ray sets: primary, incoherent, shadow (default all)\n"
+           "  --threads LIST      thread counts, e.g. 1,8 (default 1 and the number of cores)\n"
+           "  --variants LIST     variants or groups (default all):\n"
+           "                      hairobb: default (= mixed), exact4, exact16, pieces4, pieces8, pieces16, aabb, obb\n"
+           "                      Embree: embree-r4, embree-r8, embree-r16 (flat), embree-round\n"
+           "                      groups: all, hairobb, embree, precision, ablation\n"
+           "  --passes N          timed passes per measurement, median reported (default %d, 3..64)\n"
+           "  --accuracy-rays N   primary rays checked against the reference, 0 = none (default %d)\n"
+           "  --tsv FILE          every figure, one row per scene and variant (default %s)\n"
+           "  --png FILE          run time against error chart, drawn by gnuplot if present (default %s)\n"
+           "  --plot-script FILE  gnuplot script (default %s)\n"
+           "  --straight-path P   file of the 'straight' scene (default %s)\n"
+           "  --furball-path P    furBall_A.bin.gz (default %s)\n"
+           "  --quiet             no progress on stderr (shown only when stderr is a terminal)\n"
+           "  --help              this text\n",
+           DEFAULT_SEGMENTS, DEFAULT_RESOLUTION, DEFAULT_PASSES, DEFAULT_ACCURACY_RAYS, DEFAULT_TSV_PATH,
+           DEFAULT_PNG_PATH, DEFAULT_PLOT_SCRIPT, DEFAULT_STRAIGHT_PATH, SCENE_FURBALL_DEFAULT_PATH);
+}
+
+/* Parses a count with an optional k or M suffix; 0 on success. */
+static int parse_count(const char *text, size_t *value)
+{
+    char *end;
+    errno = 0;
+    double number = strtod(text, &end);
+    if (*end == 'k' || *end == 'K')
+        number *= 1e3, end++;
+    else if (*end == 'm' || *end == 'M')
+        number *= 1e6, end++;
+    if (errno || end == text || *end != '\0' || !(number >= 0.0) || number > 4e9)
+        return 1;
+    *value = (size_t)(number + 0.5);
+    return 0;
+}
+
+static int add_scenes(options *o, const char *list)
+{
+    char *copy = (char *)malloc(strlen(list) + 1);
+    if (!copy)
+        return 1;
+    strcpy(copy, list);
+    /* names are kept for the whole run; the copy is never freed */
+    char *rest = NULL;
+    for (char *name = strtok_r(copy, ",", &rest); name; name = strtok_r(NULL, ",", &rest)) {
+        if (o->scene_count == MAX_SCENES) {
+            fprintf(stderr, "bench: at most %d scenes\n", MAX_SCENES);
+            return 1;
+        }
+        o->scenes[o->scene_count++] = name;
+    }
+    return 0;
+}
+
+static int parse_ray_kinds(options *o, const char *list)
+{
+    char buffer[256];
+    snprintf(buffer, sizeof buffer, "%s", list);
+    memset(o->ray_kind_enabled, 0, sizeof o->ray_kind_enabled);
+    char *rest = NULL;
+    for (char *name = strtok_r(buffer, ",", &rest); name; name = strtok_r(NULL, ",", &rest)) {
+        int found = 0;
+        for (int k = 0; k < RAY_KIND_COUNT; k++)
+            if (strcmp(name, ray_kind_names[k]) == 0)
+                o->ray_kind_enabled[k] = found = 1;
+        if (!found)
+            return 1;
+    }
+    return 0;
+}
+
+static int parse_thread_counts(options *o, const char *list)
+{
+    char buffer[256];
+    snprintf(buffer, sizeof buffer, "%s", list);
+    o->thread_count_count = 0;
+    char *rest = NULL;
+    for (char *item = strtok_r(buffer, ",", &rest); item; item = strtok_r(NULL, ",", &rest)) {
+        size_t count;
+        if (parse_count(item, &count) != 0 || count < 1 || count > 256 || o->thread_count_count == MAX_THREAD_COUNTS)
+            return 1;
+        o->thread_counts[o->thread_count_count++] = (unsigned)count;
+    }
+    return o->thread_count_count == 0;
+}
+
+static void default_options(options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->segments = DEFAULT_SEGMENTS;
+    o->resolution = DEFAULT_RESOLUTION;
+    for (int k = 0; k < RAY_KIND_COUNT; k++)
+        o->ray_kind_enabled[k] = 1;
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    o->thread_counts[o->thread_count_count++] = 1;
+    if (cores > 1)
+        o->thread_counts[o->thread_count_count++] = (unsigned)(cores < 256 ? cores : 256);
+    o->variant_list = "all";
+    o->passes = DEFAULT_PASSES;
+    o->accuracy_rays = DEFAULT_ACCURACY_RAYS;
+    o->tsv_path = DEFAULT_TSV_PATH;
+    o->png_path = DEFAULT_PNG_PATH;
+    o->plot_script = DEFAULT_PLOT_SCRIPT;
+    o->straight_path = getenv("HAIROBB_STRAIGHT_HAIR") ? getenv("HAIROBB_STRAIGHT_HAIR") : DEFAULT_STRAIGHT_PATH;
+    o->furball_path = NULL; /* scenes.h's default */
+}
+
+/* Returns 0 to run, 1 on a usage error, 2 after --help. */
+static int parse_options(int argc, char **argv, options *o)
+{
+    default_options(o);
+    for (int i = 1; i < argc; i++) {
+        const char *arg = argv[i], *value = NULL;
+        char name[64];
+        size_t length = strcspn(arg, "=");
+        snprintf(name, sizeof name, "%.*s", (int)length, arg);
+        if (arg[length] == '=')
+            value = arg + length + 1;
+        if (strcmp(name, "--help") == 0 || strcmp(name, "-h") == 0) {
+            print_help();
+            return 2;
+        }
+        if (strcmp(name, "--quiet") == 0) {
+            o->quiet = 1;
+            continue;
+        }
+        if (!value) {
+            if (i + 1 >= argc) {
+                fprintf(stderr, "bench: %s needs a value (see --help)\n", name);
+                return 1;
+            }
+            value = argv[++i];
+        }
+        size_t count = 0;
+        int bad = 0;
+        if (strcmp(name, "--scene") == 0)
+            bad = add_scenes(o, value);
+        else if (strcmp(name, "--segments") == 0)
+            bad = parse_count(value, &o->segments) || o->segments == 0;
+        else if (strcmp(name, "--res") == 0) {
+            bad = parse_count(value, &count) || count < 1 || count > 16384;
+            o->resolution = (int)count;
+        } else if (strcmp(name, "--rays") == 0)
+            bad = parse_ray_kinds(o, value);
+        else if (strcmp(name, "--threads") == 0)
+            bad = parse_thread_counts(o, value);
+        else if (strcmp(name, "--variants") == 0)
+            o->variant_list = value;
+        else if (strcmp(name, "--passes") == 0) {
+            bad = parse_count(value, &count) || count < 3 || count > 64; /* a median needs 3 */
+            o->passes = (int)count;
+        } else if (strcmp(name, "--accuracy-rays") == 0)
+            bad = parse_count(value, &o->accuracy_rays);
+        else if (strcmp(name, "--tsv") == 0)
+            o->tsv_path = value;
+        else if (strcmp(name, "--png") == 0)
+            o->png_path = value;
+        else if (strcmp(name, "--plot-script") == 0)
+            o->plot_script = value;
+        else if (strcmp(name, "--straight-path") == 0)
+            o->straight_path = value;
+        else if (strcmp(name, "--furball-path") == 0)
+            o->furball_path = value;
+        else {
+            fprintf(stderr, "bench: unknown option %s (see --help)\n", name);
+            return 1;
+        }
+        if (bad) {
+            fprintf(stderr, "bench: bad value '%s' for %s (see --help)\n", value, name);
+            return 1;
+        }
+    }
+    if (o->scene_count == 0)
+        o->scenes[o->scene_count++] = "combed";
+    return 0;
+}
+
+/* ======================================================================== */
+/* Main                                                                     */
+/* ======================================================================== */
+
+/* Loads, measures and prints one scene. Returns 0, or 1 on an error. */
+static int run_scene(const options *o, const char *name, const int selected[VARIANT_COUNT], scene_result *sr)
+{
+    workload w;
+    memset(&w, 0, sizeof w);
+    memset(sr, 0, sizeof *sr);
+    snprintf(sr->name, sizeof sr->name, "%s", name);
+    progress("%s: loading", name);
+    double start = scene_now();
+    int loaded = load_scene(o, name, &w.scene);
+    if (loaded == -1) {
+        printf("\n=== scene %s: file not found, skipped\n", name);
+        return 0;
+    }
+    if (loaded != 0) {
+        if (loaded == 1)
+            fprintf(stderr, "bench: cannot load scene %s (unreadable, malformed or out of memory)\n", name);
+        return 1;
+    }
+    progress("%s: %zu segments in %.2f s", w.scene.name, w.scene.segment_count, scene_now() - start);
+    snprintf(sr->name, sizeof sr->name, "%s", w.scene.name);
+    sr->segment_count = w.scene.segment_count;
+    if (workload_prepare(o, selected, &w) != 0) {
+        workload_free(&w);
+        return 1;
+    }
+    sr->loaded = 1;
+    for (int k = 0; k < RAY_KIND_COUNT; k++)
+        sr->ray_counts[k] = w.rays[k].count;
+    for (int i = 0; i < VARIANT_COUNT; i++)
+        if (selected[i])
+            run_variant(o, &w, &all_variants[i], &sr->variants[i]);
+    print_scene_header(o, &w);
+    print_build_table(sr, selected);
+    print_speed_table(o, sr, selected);
+    print_accuracy_table(&w, sr, selected);
+    fflush(stdout);
+    workload_free(&w);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    options o;
+    int parsed = parse_options(argc, argv, &o);
+    if (parsed)
+        return parsed == 2 ? 0 : 2;
+    int selected[VARIANT_COUNT] = {0};
+    if (select_variants(o.variant_list, selected) != 0)
+        return 2;
+    show_progress = isatty(STDERR_FILENO) && !o.quiet;
+
+    print_machine(&o);
+    static scene_result results[MAX_SCENES];
+    FILE *tsv = tsv_open(&o);
+    int failures = 0;
+    for (int s = 0; s < o.scene_count; s++) {
+        failures += run_scene(&o, o.scenes[s], selected, &results[s]);
+        if (tsv && results[s].loaded)
+            tsv_write_scene(tsv, &o, &results[s], selected);
+    }
+    if (tsv)
+        fclose(tsv);
+
+    char note[512];
+    const char *chart_note = tsv ? draw_chart(&o, results, o.scene_count, selected, note, sizeof note) : "no TSV, no chart";
+    print_ablation_table(&o, results, o.scene_count, selected);
+    print_tradeoff_table(&o, results, o.scene_count, selected, chart_note);
+    printf("\nTSV: %s; %s\n", tsv ? o.tsv_path : "not written", chart_note);
+    return failures ? 1 : 0;
+}
