@@ -1230,6 +1230,8 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
                 child = HAIROBB__CAST(const hairobb__obb_node *, node)->child;
             }
             if (!bits) { ref = HAIROBB__REF_EMPTY; break; }
+            i = hairobb__lowest_bit((unsigned)bits);
+            if (!(bits & (bits - 1))) { ref = child[i]; continue; }   /* one hit: the common case */
             /* insertion sort of the hit children, nearest last */
             while (bits) {
                 int j = hairobb__lowest_bit((unsigned)bits);
