@@ -354,6 +354,7 @@ static hairobb__v4 hairobb__v4_min(hairobb__v4 a, hairobb__v4 b) { return _mm_mi
 static hairobb__v4 hairobb__v4_max(hairobb__v4 a, hairobb__v4 b) { return _mm_max_ps(a, b); }
 static int hairobb__v4_le_bits(hairobb__v4 a, hairobb__v4 b) { return _mm_movemask_ps(_mm_cmple_ps(a, b)); }
 static void hairobb__v4_store(float *p, hairobb__v4 a) { _mm_storeu_ps(p, a); }
+static void hairobb__v4_transpose(hairobb__v4 r[4]) { _MM_TRANSPOSE4_PS(r[0], r[1], r[2], r[3]); }
 /* x, or +-tiny where |x| < tiny: keeps 1/x finite for directions parallel to a slab. */
 static hairobb__v4 hairobb__v4_nonzero(hairobb__v4 x, float tiny)
 {
@@ -385,6 +386,12 @@ static int hairobb__v4_le_bits(hairobb__v4 a, hairobb__v4 b)
     return bits;
 }
 static void hairobb__v4_store(float *p, hairobb__v4 a) { memcpy(p, a.f, sizeof a.f); }
+static void hairobb__v4_transpose(hairobb__v4 r[4])
+{
+    int i, j;
+    for (i = 0; i < 4; ++i)
+        for (j = i + 1; j < 4; ++j) { float t = r[i].f[j]; r[i].f[j] = r[j].f[i]; r[j].f[i] = t; }
+}
 #endif
 
 #if HAIROBB__AVX
@@ -1411,25 +1418,14 @@ static int hairobb__piece_hit(hairobb__ray_state *rs, const hairobb__ray_curve *
                            xa + s * (xb - xa), ya + s * (yb - ya), ra + s * (rb - ra));
 }
 
-static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint32_t prim, int any_hit)
+/* The pieces stage of one segment that survived the cull, c in ray space. */
+static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *rs, const hairobb__ray_curve *c,
+                                    uint32_t prim, int any_hit)
 {
-    hairobb__ray_curve c;
     hairobb__ray_poly poly;
     int have_poly = 0;
-    float max_r, min_x, max_x, min_y, max_y, min_z, max_z, bend, bend_r, pad, magnitude;
+    float bend, bend_r, pad, magnitude = 0.0f;
     int i, chunk, found = 0;
-    hairobb__to_ray_space(rs, bvh->vertices + 4 * (size_t)bvh->indices[prim], &c);
-
-    /* cull with the control polygon: the ribbon lies in its hull dilated by max r */
-    max_r = hairobb__maxf(hairobb__maxf(c.r[0], c.r[1]), hairobb__maxf(c.r[2], c.r[3]));
-    min_x = max_x = c.x[0]; min_y = max_y = c.y[0]; min_z = max_z = c.z[0];
-    for (i = 1; i < 4; ++i) {
-        min_x = hairobb__minf(min_x, c.x[i]); max_x = hairobb__maxf(max_x, c.x[i]);
-        min_y = hairobb__minf(min_y, c.y[i]); max_y = hairobb__maxf(max_y, c.y[i]);
-        min_z = hairobb__minf(min_z, c.z[i]); max_z = hairobb__maxf(max_z, c.z[i]);
-    }
-    if (min_x > max_r || max_x < -max_r || min_y > max_r || max_y < -max_r) return 0;
-    if (max_z < rs->tnear * rs->dir_length || min_z > rs->tfar * rs->dir_length) return 0;
 
     /* A piece of parameter length h strays from its chord by at most
        h^2/8 max|P''| and |P''| <= 6 max|second difference|: widen the chord
@@ -1437,11 +1433,11 @@ static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state
        plus rounding of the evaluated points. */
     bend = 0.0f; bend_r = 0.0f;
     for (i = 0; i < 2; ++i) {
-        float ddx = c.x[i] - 2.0f * c.x[i + 1] + c.x[i + 2], ddy = c.y[i] - 2.0f * c.y[i + 1] + c.y[i + 2];
+        float ddx = c->x[i] - 2.0f * c->x[i + 1] + c->x[i + 2], ddy = c->y[i] - 2.0f * c->y[i + 1] + c->y[i + 2];
         bend = hairobb__maxf(bend, sqrtf(ddx * ddx + ddy * ddy));
-        bend_r = hairobb__maxf(bend_r, fabsf(c.r[i] - 2.0f * c.r[i + 1] + c.r[i + 2]));
+        bend_r = hairobb__maxf(bend_r, fabsf(c->r[i] - 2.0f * c->r[i + 1] + c->r[i + 2]));
     }
-    magnitude = hairobb__maxf(hairobb__maxf(fabsf(min_x), fabsf(max_x)), hairobb__maxf(fabsf(min_y), fabsf(max_y)));
+    for (i = 0; i < 4; ++i) magnitude = hairobb__maxf(magnitude, hairobb__maxf(fabsf(c->x[i]), fabsf(c->y[i])));
     pad = (bend + bend_r) * (0.75f / (float)(bvh->pieces * bvh->pieces)) + magnitude * (8.0f * FLT_EPSILON);
     if (bvh->precision == HAIROBB_PRECISION_PIECES) pad = 0.0f;
 
@@ -1457,9 +1453,9 @@ static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state
             hairobb__v8 w2 = hairobb__v8_load(w[e][2]), w3 = hairobb__v8_load(w[e][3]);
 #define HAIROBB__EVAL(v) hairobb__v8_add(hairobb__v8_add(hairobb__v8_add(hairobb__v8_mul(w0, hairobb__v8_set1(v[0])), \
         hairobb__v8_mul(w1, hairobb__v8_set1(v[1]))), hairobb__v8_mul(w2, hairobb__v8_set1(v[2]))), hairobb__v8_mul(w3, hairobb__v8_set1(v[3])))
-            end_x[e] = HAIROBB__EVAL(c.x);
-            end_y[e] = HAIROBB__EVAL(c.y);
-            end_r[e] = HAIROBB__EVAL(c.r);
+            end_x[e] = HAIROBB__EVAL(c->x);
+            end_y[e] = HAIROBB__EVAL(c->y);
+            end_r[e] = HAIROBB__EVAL(c->r);
 #undef HAIROBB__EVAL
         }
         /* closest point of each chord to the ray axis (Nakamaru and Ohno) */
@@ -1488,9 +1484,9 @@ static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state
             float a = (float)k / (float)bvh->pieces, b = (float)(k + 1) / (float)bvh->pieces;
             bits &= bits - 1;
             if (bvh->precision == HAIROBB_PRECISION_PIECES) {
-                found |= hairobb__piece_hit(rs, &c, prim, a, b, s_lanes[lane]);
+                found |= hairobb__piece_hit(rs, c, prim, a, b, s_lanes[lane]);
             } else {
-                if (!have_poly) { hairobb__to_power_form(&c, &poly); have_poly = 1; }
+                if (!have_poly) { hairobb__to_power_form(c, &poly); have_poly = 1; }
                 found |= hairobb__refine_piece(rs, &poly, prim, a, b);
             }
             if (found && any_hit) return 1;
@@ -1499,17 +1495,70 @@ static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state
     return found;
 }
 
-static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint64_t ref, int any_hit)
+/* Segments prims[0, count), four at a time: their control points are moved
+   into ray space together and culled by the control polygon (the ribbon lies
+   in its hull dilated by the largest radius); survivors go to the pieces. */
+static int hairobb__intersect_segments(const hairobb_bvh *bvh, hairobb__ray_state *rs, const uint32_t *prims,
+                                       size_t count, int any_hit)
 {
-    size_t first = (size_t)(ref >> 8), count = (size_t)((ref >> 4) & 15u), i;
+    const hairobb__v4 ox = hairobb__v4_set1(rs->org[0]), oy = hairobb__v4_set1(rs->org[1]), oz = hairobb__v4_set1(rs->org[2]);
+    const hairobb__v4 z_near = hairobb__v4_set1(rs->tnear * rs->dir_length);
+    size_t group;
     int found = 0;
-    for (i = 0; i < count; ++i) {
-        if (hairobb__intersect_segment(bvh, rs, bvh->leaf_prims[first + i], any_hit)) {
-            found = 1;
-            if (any_hit) return 1;
+    for (group = 0; group < count; group += 4) {
+        int lanes = count - group < 4 ? (int)(count - group) : 4, lane, k;
+        const float *cp[4];
+        float x[4][4], y[4][4], z[4][4], r[4][4];   /* [control point][lane] */
+        hairobb__v4 min_x, max_x, min_y, max_y, min_z, max_z, max_r, neg_r;
+        unsigned keep;
+        for (lane = 0; lane < 4; ++lane)
+            cp[lane] = bvh->vertices + 4 * (size_t)bvh->indices[prims[group + (lane < lanes ? lane : 0)]];
+        for (k = 0; k < 4; ++k) {
+            hairobb__v4 p[4], qx, qy, qz;
+            int axis;
+            for (lane = 0; lane < 4; ++lane) p[lane] = hairobb__v4_load(cp[lane] + 4 * k);
+            hairobb__v4_transpose(p);   /* p[0..3]: x, y, z, radius of control point k */
+            qx = hairobb__v4_sub(p[0], ox); qy = hairobb__v4_sub(p[1], oy); qz = hairobb__v4_sub(p[2], oz);
+            for (axis = 0; axis < 3; ++axis) {
+                const float *f = rs->frame + 3 * axis;
+                hairobb__v4 v = hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(f[0]), qx),
+                                                                hairobb__v4_mul(hairobb__v4_set1(f[1]), qy)),
+                                                hairobb__v4_mul(hairobb__v4_set1(f[2]), qz));
+                hairobb__v4_store(axis == 0 ? x[k] : axis == 1 ? y[k] : z[k], v);
+            }
+            hairobb__v4_store(r[k], p[3]);
+        }
+        min_x = max_x = hairobb__v4_load(x[0]); min_y = max_y = hairobb__v4_load(y[0]);
+        min_z = max_z = hairobb__v4_load(z[0]); max_r = hairobb__v4_load(r[0]);
+        for (k = 1; k < 4; ++k) {
+            min_x = hairobb__v4_min(min_x, hairobb__v4_load(x[k])); max_x = hairobb__v4_max(max_x, hairobb__v4_load(x[k]));
+            min_y = hairobb__v4_min(min_y, hairobb__v4_load(y[k])); max_y = hairobb__v4_max(max_y, hairobb__v4_load(y[k]));
+            min_z = hairobb__v4_min(min_z, hairobb__v4_load(z[k])); max_z = hairobb__v4_max(max_z, hairobb__v4_load(z[k]));
+            max_r = hairobb__v4_max(max_r, hairobb__v4_load(r[k]));
+        }
+        neg_r = hairobb__v4_sub(hairobb__v4_set1(0.0f), max_r);
+        keep = (unsigned)(hairobb__v4_le_bits(min_x, max_r) & hairobb__v4_le_bits(neg_r, max_x) &
+                          hairobb__v4_le_bits(min_y, max_r) & hairobb__v4_le_bits(neg_r, max_y) &
+                          hairobb__v4_le_bits(z_near, max_z) &
+                          hairobb__v4_le_bits(min_z, hairobb__v4_set1(rs->tfar * rs->dir_length)));
+        keep &= (1u << lanes) - 1u;
+        while (keep) {
+            hairobb__ray_curve c;
+            lane = hairobb__lowest_bit(keep);
+            keep &= keep - 1;
+            for (k = 0; k < 4; ++k) { c.x[k] = x[k][lane]; c.y[k] = y[k][lane]; c.z[k] = z[k][lane]; c.r[k] = r[k][lane]; }
+            if (hairobb__intersect_curve(bvh, rs, &c, prims[group + (size_t)lane], any_hit)) {
+                found = 1;
+                if (any_hit) return 1;
+            }
         }
     }
     return found;
+}
+
+static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint64_t ref, int any_hit)
+{
+    return hairobb__intersect_segments(bvh, rs, bvh->leaf_prims + (size_t)(ref >> 8), (size_t)((ref >> 4) & 15u), any_hit);
 }
 
 /* Hit attributes, computed once for the final hit only. */
