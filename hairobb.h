@@ -462,7 +462,6 @@ typedef struct hairobb__rotated_node {
 struct hairobb_bvh {
     const float *vertices;
     const uint32_t *indices;
-    size_t vertex_count, segment_count;
     void *allocator_user;
     void *node_allocation;            /* what HAIROBB_MALLOC returned */
     unsigned char *nodes;             /* 64-byte aligned inside node_allocation */
@@ -1035,8 +1034,6 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     hairobb__pad_box(bvh->lower, bvh->upper);
     bvh->vertices = vertices;
     bvh->indices = indices;
-    bvh->vertex_count = vertex_count;
-    bvh->segment_count = segment_count;
     bvh->allocator_user = b.user;
     bvh->leaf_prims = b.ids;
     bvh->leaf_prim_count = segment_count;
@@ -1275,19 +1272,33 @@ typedef struct hairobb__ray_curve {
     float x[4], y[4], z[4], r[4];
 } hairobb__ray_curve;
 
-static void hairobb__to_ray_space(const hairobb__ray_state *rs, const float *cp, hairobb__ray_curve *c)
+/* The control points of 4 segments (cp[lane], float4 each) in ray space:
+   x, y across the ray, z along it; [control point][lane]. */
+static void hairobb__to_ray_space(const hairobb__ray_state *rs, const float *const cp[4],
+                                  float x[4][4], float y[4][4], float z[4][4], float r[4][4])
 {
-    int i;
-    for (i = 0; i < 4; ++i) {
-        float q[3];
-        q[0] = cp[4 * i] - rs->org[0];
-        q[1] = cp[4 * i + 1] - rs->org[1];
-        q[2] = cp[4 * i + 2] - rs->org[2];
-        c->x[i] = hairobb__dot3(rs->frame, q);
-        c->y[i] = hairobb__dot3(rs->frame + 3, q);
-        c->z[i] = hairobb__dot3(rs->frame + 6, q);
-        c->r[i] = cp[4 * i + 3];
+    const hairobb__v4 ox = hairobb__v4_set1(rs->org[0]), oy = hairobb__v4_set1(rs->org[1]), oz = hairobb__v4_set1(rs->org[2]);
+    int k, lane, axis;
+    for (k = 0; k < 4; ++k) {
+        hairobb__v4 p[4], qx, qy, qz;
+        for (lane = 0; lane < 4; ++lane) p[lane] = hairobb__v4_load(cp[lane] + 4 * k);
+        hairobb__v4_transpose(p);   /* p[0..3]: x, y, z, radius of control point k */
+        qx = hairobb__v4_sub(p[0], ox); qy = hairobb__v4_sub(p[1], oy); qz = hairobb__v4_sub(p[2], oz);
+        for (axis = 0; axis < 3; ++axis) {
+            const float *f = rs->frame + 3 * axis;
+            hairobb__v4 v = hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(f[0]), qx),
+                                                            hairobb__v4_mul(hairobb__v4_set1(f[1]), qy)),
+                                            hairobb__v4_mul(hairobb__v4_set1(f[2]), qz));
+            hairobb__v4_store(axis == 0 ? x[k] : axis == 1 ? y[k] : z[k], v);
+        }
+        hairobb__v4_store(r[k], p[3]);
     }
+}
+
+static void hairobb__lane_curve(float x[4][4], float y[4][4], float z[4][4], float r[4][4], int lane, hairobb__ray_curve *c)
+{
+    int k;
+    for (k = 0; k < 4; ++k) { c->x[k] = x[k][lane]; c->y[k] = y[k][lane]; c->z[k] = z[k][lane]; c->r[k] = r[k][lane]; }
 }
 
 /* The same curve in power form, a[0] + a[1] u + a[2] u^2 + a[3] u^3: the
@@ -1501,7 +1512,6 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
 static int hairobb__intersect_segments(const hairobb_bvh *bvh, hairobb__ray_state *rs, const uint32_t *prims,
                                        size_t count, int any_hit)
 {
-    const hairobb__v4 ox = hairobb__v4_set1(rs->org[0]), oy = hairobb__v4_set1(rs->org[1]), oz = hairobb__v4_set1(rs->org[2]);
     const hairobb__v4 z_near = hairobb__v4_set1(rs->tnear * rs->dir_length);
     size_t group;
     int found = 0;
@@ -1513,21 +1523,7 @@ static int hairobb__intersect_segments(const hairobb_bvh *bvh, hairobb__ray_stat
         unsigned keep;
         for (lane = 0; lane < 4; ++lane)
             cp[lane] = bvh->vertices + 4 * (size_t)bvh->indices[prims[group + (lane < lanes ? lane : 0)]];
-        for (k = 0; k < 4; ++k) {
-            hairobb__v4 p[4], qx, qy, qz;
-            int axis;
-            for (lane = 0; lane < 4; ++lane) p[lane] = hairobb__v4_load(cp[lane] + 4 * k);
-            hairobb__v4_transpose(p);   /* p[0..3]: x, y, z, radius of control point k */
-            qx = hairobb__v4_sub(p[0], ox); qy = hairobb__v4_sub(p[1], oy); qz = hairobb__v4_sub(p[2], oz);
-            for (axis = 0; axis < 3; ++axis) {
-                const float *f = rs->frame + 3 * axis;
-                hairobb__v4 v = hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(f[0]), qx),
-                                                                hairobb__v4_mul(hairobb__v4_set1(f[1]), qy)),
-                                                hairobb__v4_mul(hairobb__v4_set1(f[2]), qz));
-                hairobb__v4_store(axis == 0 ? x[k] : axis == 1 ? y[k] : z[k], v);
-            }
-            hairobb__v4_store(r[k], p[3]);
-        }
+        hairobb__to_ray_space(rs, cp, x, y, z, r);
         min_x = max_x = hairobb__v4_load(x[0]); min_y = max_y = hairobb__v4_load(y[0]);
         min_z = max_z = hairobb__v4_load(z[0]); max_r = hairobb__v4_load(r[0]);
         for (k = 1; k < 4; ++k) {
@@ -1546,7 +1542,7 @@ static int hairobb__intersect_segments(const hairobb_bvh *bvh, hairobb__ray_stat
             hairobb__ray_curve c;
             lane = hairobb__lowest_bit(keep);
             keep &= keep - 1;
-            for (k = 0; k < 4; ++k) { c.x[k] = x[k][lane]; c.y[k] = y[k][lane]; c.z[k] = z[k][lane]; c.r[k] = r[k][lane]; }
+            hairobb__lane_curve(x, y, z, r, lane, &c);
             if (hairobb__intersect_curve(bvh, rs, &c, prims[group + (size_t)lane], any_hit)) {
                 found = 1;
                 if (any_hit) return 1;
@@ -1565,11 +1561,14 @@ static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *r
 static void hairobb__fill_hit(const hairobb_bvh *bvh, const hairobb__ray_state *rs, hairobb_hit *hit)
 {
     const float *cp = bvh->vertices + 4 * (size_t)bvh->indices[rs->hit_prim];
+    const float *const same[4] = {cp, cp, cp, cp};
+    float lane_x[4][4], lane_y[4][4], lane_z[4][4], lane_r[4][4];
     hairobb__ray_curve c;
     float u = rs->hit_u, world[4], tangent_xy[2], x, y, r, tlen2, along, n[3], nlen;
     const float *unit_dir = rs->frame + 6;
     int k, i;
-    hairobb__to_ray_space(rs, cp, &c);
+    hairobb__to_ray_space(rs, same, lane_x, lane_y, lane_z, lane_r);
+    hairobb__lane_curve(lane_x, lane_y, lane_z, lane_r, 0, &c);
     for (k = 0; k < 3; ++k) {
         for (i = 0; i < 4; ++i) world[i] = cp[4 * i + k];
         hairobb__bezier(world, u, &hit->tangent[k], NULL);
