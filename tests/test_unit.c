@@ -260,7 +260,7 @@ static void test_bounds_and_traversal(void)
             uint32_t p;
             int brute = 0, got = hairobb_intersect1(bvh, &ray, &hit);
             hairobb__ray_setup(&rs, &ray);
-            for (p = 0; p < n; ++p) brute |= hairobb__intersect_segments(bvh, &rs, &p, 1, 0);
+            for (p = 0; p < n; ++p) brute |= hairobb__intersect_segment(bvh, &rs, p, 0);
             if (brute != got || (got && (hit.prim_id != rs.hit_prim || hit.t != rs.tfar))) ++mismatches;
             if (hairobb_occluded1(bvh, &ray) != got) ++occluded_mismatches;
             if (got && !(hit.t >= ray.tnear && hit.u >= 0.0f && hit.u <= 1.0f && hit.v >= -1.0f && hit.v <= 1.0f)) ++mismatches;
