@@ -273,6 +273,19 @@ static inline void ref__isolate(ref__roots *roots, const double c[6], double a, 
 
 /* ctrl: the 16 floats of the 4 control points. Writes hit (without prim_id)
  * only when returning 1. Ties in t keep the smaller u. */
+/* 1 if all four coordinates lie on one side of [-radius, radius], padded. */
+static inline int ref__farther_than(const double p[4], double radius)
+{
+    double lo = p[0], hi = p[0], pad;
+    int i;
+    for (i = 1; i < 4; ++i) {
+        lo = p[i] < lo ? p[i] : lo;
+        hi = p[i] > hi ? p[i] : hi;
+    }
+    pad = radius + REF_REL_PAD * (radius + fabs(lo) + fabs(hi)) + REF_ABS_PAD;
+    return lo > pad || hi < -pad;
+}
+
 static inline int ref__segment_hit(const ref__ray *ray, const float *ctrl, double tnear, double tfar, ref_hit *hit)
 {
     double rel[3][4];   /* control points relative to the origin, world axes */
@@ -280,7 +293,7 @@ static inline int ref__segment_hit(const ref__ray *ray, const float *ctrl, doubl
     double px[4], py[4], pz[4]; /* control points in ray space */
     double dx[3], dy[3];        /* derivative control points / 3 */
     double coef[6];
-    double max_radius, lo, hi, pad, zmin, zmax, len = ray->dir_len;
+    double max_radius, zmin, zmax, len = ray->dir_len;
     ref__roots roots;
     int i, k, found = 0;
     ref_hit best;
@@ -307,21 +320,7 @@ static inline int ref__segment_hit(const ref__ray *ray, const float *ctrl, doubl
     /* Early-out: the projected curve lies in the hull of the projected
      * control points, so it is farther than max_radius from the ray if the
      * hull's 2D bounds are. Same for the depth range vs [tnear, tfar]. */
-    lo = hi = px[0];
-    for (i = 1; i < 4; ++i) {
-        lo = px[i] < lo ? px[i] : lo;
-        hi = px[i] > hi ? px[i] : hi;
-    }
-    pad = max_radius + REF_REL_PAD * (max_radius + fabs(lo) + fabs(hi)) + REF_ABS_PAD;
-    if (lo > pad || hi < -pad)
-        return 0;
-    lo = hi = py[0];
-    for (i = 1; i < 4; ++i) {
-        lo = py[i] < lo ? py[i] : lo;
-        hi = py[i] > hi ? py[i] : hi;
-    }
-    pad = max_radius + REF_REL_PAD * (max_radius + fabs(lo) + fabs(hi)) + REF_ABS_PAD;
-    if (lo > pad || hi < -pad)
+    if (ref__farther_than(px, max_radius) || ref__farther_than(py, max_radius))
         return 0;
     zmin = zmax = pz[0];
     for (i = 1; i < 4; ++i) {
