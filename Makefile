@@ -10,7 +10,7 @@ LIBS      = -lm
 EMBREE    = -lembree3
 B         = build
 
-TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_scenes $(B)/test_simd $(B)/test_accuracy
+TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_scenes $(B)/test_simd $(B)/test_accuracy $(B)/test_far
 
 .PHONY: all test deps compile-matrix bench examples clean
 all: $(TESTS) $(B)/bench examples
@@ -41,6 +41,9 @@ $(B)/test_simd: tests/test_simd.c $(B)/simd_plain.o $(B)/simd_sse.o $(B)/simd_av
 	$(CC) $(BASE) $(ARCH) $(filter %.c %.o,$^) -o $@ $(LIBS)
 
 $(B)/test_accuracy: tests/test_accuracy.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
+
+$(B)/test_far: tests/test_far.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
 
 $(B)/bench: bench/bench.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps

@@ -59,7 +59,8 @@
                              its own hair space, an affine map onto the unit
                              cube; HAIROBB_OBB_SHARED_ROTATION: the ray is
                              rotated once per node into the node's hair space
-                             (19% less memory, about 8% slower on combed fur).
+                             (176 instead of 240 bytes, about 8% slower on
+                             combed fur).
      max_leaf_size           segments per leaf at most, 0 = 4, at most 15.
      hair_space_candidates   rotations tried per node (main directions of
                              sampled segments), 0 = 4, at most 16.
@@ -134,7 +135,7 @@ typedef enum hairobb_precision {
 
 /* How an OBB node stores its 4 boxes. */
 typedef enum hairobb_obb_layout {
-    HAIROBB_OBB_PER_CHILD = 0,       /* an affine map per child (the paper's uncompressed node): 224 bytes */
+    HAIROBB_OBB_PER_CHILD = 0,       /* an affine map per child (the paper's uncompressed node): 240 bytes */
     HAIROBB_OBB_SHARED_ROTATION      /* one rotation per node, 4 boxes in it: 176 bytes */
 } hairobb_obb_layout;
 
@@ -292,15 +293,16 @@ static void hairobb__identity_frame(float frame[9])
     frame[0] = frame[4] = frame[8] = 1.0f;
 }
 
-/* Widens [lower, upper] by a few float ulps of the largest magnitude involved,
-   so that rounding in the traversal's transform of the ray cannot make a ray
-   that touches the true box miss the stored one. */
+/* Widens [lower, upper] by 2-4 float ulps of the largest magnitude involved:
+   the rounding of the box's own computation. Rounding in the traversal
+   scales with the distance from the ray origin to the box (OBBs are stored
+   relative to a centre near them) and is covered by HAIROBB__FAR_SCALE. */
 static void hairobb__pad_box(float lower[3], float upper[3])
 {
     int k;
     for (k = 0; k < 3; ++k) {
         float mag = hairobb__maxf(hairobb__maxf(fabsf(lower[k]), fabsf(upper[k])), upper[k] - lower[k]);
-        float pad = mag * (1.0f / 524288.0f) + 1e-30f;  /* 2^-19 relative */
+        float pad = mag * (1.0f / 4194304.0f) + 1e-30f;  /* 2^-22 relative: 2-4 ulps */
         lower[k] -= pad;
         upper[k] += pad;
     }
@@ -437,18 +439,22 @@ typedef struct hairobb__aabb_node {
 } hairobb__aabb_node;
 
 /* Four oriented child boxes, each an affine map of world space onto the unit
-   cube: unit = M * p + m, with xfm[0..8] = M row-major and xfm[9..11] = m,
-   each entry holding the 4 children: 224 bytes. */
+   cube: unit = M * (p - centre) + m, with xfm[0..8] = M row-major and
+   xfm[9..11] = m, each entry holding the 4 children. Subtracting a centre
+   near the node first keeps the transform's rounding proportional to the
+   distance between ray origin and node, not to their distance from the
+   world origin: 240 bytes. */
 typedef struct hairobb__obb_node {
+    float centre[4];                  /* xyz, w unused */
     float xfm[12][4];
     uint64_t child[4];
 } hairobb__obb_node;
 
-/* Four boxes in one rotated frame, the node's hair space: the ray is rotated
-   once, then tested as in an AABB node: 176 bytes. */
+/* Four boxes in one rotated frame, the node's hair space, around a centre:
+   the ray is moved and rotated once, then tested as in an AABB node: 176 bytes. */
 typedef struct hairobb__rotated_node {
-    float rotation[9], unused[3];     /* rows: the frame's axes */
-    float lower[3][4], upper[3][4];   /* [axis][child], in the frame */
+    float rotation[9], centre[3];     /* rows: the frame's axes */
+    float lower[3][4], upper[3][4];   /* [axis][child], of R * (p - centre) */
     uint64_t child[4];
 } hairobb__rotated_node;
 
@@ -512,16 +518,19 @@ static hairobb_result hairobb__validate(const float *vertices, size_t vertex_cou
 /* Box of a segment in a rotated frame (rows of frame are the new axes).
    The ribbon lies in the convex hull of the control points dilated by the
    largest radius (r(u) is a convex combination of the 4 radii), so the box of
-   the rotated control points grown by that radius bounds it. Node boxes are
-   padded for rounding once, when stored (hairobb__pad_box). */
-static void hairobb__segment_box(const float *cp, const float frame[9], float lower[3], float upper[3])
+   the rotated control points grown by that radius bounds it. centre, if
+   given, is subtracted first. Node boxes are padded for rounding once, when
+   stored (hairobb__pad_box). */
+static void hairobb__segment_box(const float *cp, const float frame[9], const float *centre, float lower[3], float upper[3])
 {
     int i, k;
     float radius = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
     hairobb__box_empty(lower, upper);
     for (i = 0; i < 4; ++i) {
+        float p[3];
+        for (k = 0; k < 3; ++k) p[k] = centre ? cp[4 * i + k] - centre[k] : cp[4 * i + k];
         for (k = 0; k < 3; ++k) {
-            float x = hairobb__dot3(frame + 3 * k, cp + 4 * i);
+            float x = hairobb__dot3(frame + 3 * k, p);
             lower[k] = hairobb__minf(lower[k], x);
             upper[k] = hairobb__maxf(upper[k], x);
         }
@@ -560,7 +569,7 @@ static void hairobb__prim_box(const hairobb__builder *b, uint32_t id, const floa
         memcpy(lower, b->world_boxes + 6 * (size_t)id, 3 * sizeof(float));
         memcpy(upper, b->world_boxes + 6 * (size_t)id + 3, 3 * sizeof(float));
     } else {
-        hairobb__segment_box(hairobb__control_points(b, id), frame, lower, upper);
+        hairobb__segment_box(hairobb__control_points(b, id), frame, NULL, lower, upper);
     }
 }
 
@@ -647,7 +656,7 @@ static void hairobb__bin_split(const hairobb__builder *b, size_t begin, size_t e
     int axis;
     if (frame) {
         for (i = begin; i < end; ++i)
-            hairobb__segment_box(hairobb__control_points(b, b->ids[i]), frame, b->frame_boxes + 6 * i, b->frame_boxes + 6 * i + 3);
+            hairobb__segment_box(hairobb__control_points(b, b->ids[i]), frame, NULL, b->frame_boxes + 6 * i, b->frame_boxes + 6 * i + 3);
     }
     hairobb__box_empty(cmin, cmax);
     for (i = begin; i < end; ++i) {
@@ -716,6 +725,29 @@ static void hairobb__range_box(const hairobb__builder *b, size_t begin, size_t e
         hairobb__prim_box(b, b->ids[i], frame, lo, hi);
         hairobb__box_grow(lower, upper, lo, hi);
     }
+}
+
+/* The padded box of ids[begin, end) in frame around centre: what a node stores. */
+static void hairobb__node_box(const hairobb__builder *b, size_t begin, size_t end, const float frame[9],
+                              const float centre[3], float lower[3], float upper[3])
+{
+    size_t i;
+    hairobb__box_empty(lower, upper);
+    for (i = begin; i < end; ++i) {
+        float lo[3], hi[3];
+        hairobb__segment_box(hairobb__control_points(b, b->ids[i]), frame, centre, lo, hi);
+        hairobb__box_grow(lower, upper, lo, hi);
+    }
+    hairobb__pad_box(lower, upper);
+}
+
+/* A float point near the middle of the range's world box. */
+static void hairobb__range_centre(const hairobb__builder *b, size_t begin, size_t end, float centre[3])
+{
+    float lower[3], upper[3];
+    int k;
+    hairobb__range_box(b, begin, end, NULL, lower, upper);
+    for (k = 0; k < 3; ++k) centre[k] = 0.5f * lower[k] + 0.5f * upper[k];
 }
 
 /* The cheapest split the policy allows; a median split when binning finds
@@ -883,12 +915,13 @@ static uint64_t hairobb__build_node(hairobb__builder *b, size_t begin, size_t en
 
     if (node_type == HAIROBB__REF_OBB) {
         hairobb__obb_node *node = HAIROBB__CAST(hairobb__obb_node *, (void *)(b->nodes + offset));
+        hairobb__range_centre(b, begin, end, node->centre);
+        node->centre[3] = 0.0f;
         for (i = 0; i < 4; ++i) {
             float frame[9], lower[3], upper[3];
             if (i < count) {
                 hairobb__choose_hair_space(b, children[i].begin, children[i].end, 1, frame);
-                hairobb__range_box(b, children[i].begin, children[i].end, frame, lower, upper);
-                hairobb__pad_box(lower, upper);
+                hairobb__node_box(b, children[i].begin, children[i].end, frame, node->centre, lower, upper);
             } else {
                 /* an empty child maps everything to (2,2,2): never inside the unit cube */
                 memset(frame, 0, sizeof frame);
@@ -899,25 +932,27 @@ static uint64_t hairobb__build_node(hairobb__builder *b, size_t begin, size_t en
             node->child[i] = i < count ? refs[i] : HAIROBB__REF_EMPTY;
         }
     } else {
-        /* AABB and rotated nodes: 4 boxes in one frame (world axes for AABB) */
+        /* AABB and rotated nodes: 4 boxes in one frame (world axes, no centre, for AABB) */
         float frame[9], (*lower)[4], (*upper)[4];
+        const float *centre = NULL;
         uint64_t *child;
         if (node_type == HAIROBB__REF_ROTATED) {
             hairobb__rotated_node *node = HAIROBB__CAST(hairobb__rotated_node *, (void *)(b->nodes + offset));
             hairobb__choose_hair_space(b, begin, end, 1, frame);
             memcpy(node->rotation, frame, sizeof frame);
-            memset(node->unused, 0, sizeof node->unused);
+            hairobb__range_centre(b, begin, end, node->centre);
+            centre = node->centre;
             lower = node->lower; upper = node->upper; child = node->child;
         } else {
             hairobb__aabb_node *node = HAIROBB__CAST(hairobb__aabb_node *, (void *)(b->nodes + offset));
+            hairobb__identity_frame(frame);
             lower = node->lower; upper = node->upper; child = node->child;
         }
         for (i = 0; i < 4; ++i) {
             float lo[3], hi[3];
             int k;
             if (i < count) {
-                hairobb__range_box(b, children[i].begin, children[i].end, node_type == HAIROBB__REF_ROTATED ? frame : NULL, lo, hi);
-                hairobb__pad_box(lo, hi);
+                hairobb__node_box(b, children[i].begin, children[i].end, frame, centre, lo, hi);
             } else { for (k = 0; k < 3; ++k) { lo[k] = INFINITY; hi[k] = -INFINITY; } }
             for (k = 0; k < 3; ++k) { lower[k][i] = lo[k]; upper[k][i] = hi[k]; }
             child[i] = i < count ? refs[i] : HAIROBB__REF_EMPTY;
@@ -1005,7 +1040,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     hairobb__box_empty(bvh->lower, bvh->upper);
     for (i = 0; i < segment_count; ++i) {
         float *box = b.world_boxes + 6 * i;
-        hairobb__segment_box(vertices + 4 * (size_t)indices[i], identity, box, box + 3);
+        hairobb__segment_box(vertices + 4 * (size_t)indices[i], identity, NULL, box, box + 3);
         hairobb__box_grow(bvh->lower, bvh->upper, box, box + 3);
         b.ids[i] = (uint32_t)i;
     }
@@ -1160,10 +1195,11 @@ static int hairobb__intersect_boxes(const float (*lower)[4], const float (*upper
 static int hairobb__intersect_rotated_node(const hairobb__rotated_node *node, const hairobb__ray_state *rs, float dist[4])
 {
     hairobb__slab_ray slab;
-    float org[3], dir[3];
+    float org[3], dir[3], moved[3];
     int k;
+    for (k = 0; k < 3; ++k) moved[k] = rs->org[k] - node->centre[k];
     for (k = 0; k < 3; ++k) {
-        org[k] = hairobb__dot3(node->rotation + 3 * k, rs->org);
+        org[k] = hairobb__dot3(node->rotation + 3 * k, moved);
         dir[k] = hairobb__dot3(node->rotation + 3 * k, rs->dir);
     }
     hairobb__slab_setup(&slab, org, dir);
@@ -1174,7 +1210,8 @@ static int hairobb__intersect_obb_node(const hairobb__obb_node *node, const hair
 {
     hairobb__v4 tn = hairobb__v4_set1(rs->tnear), tf = hairobb__v4_set1(rs->tfar);
     hairobb__v4 one = hairobb__v4_set1(1.0f);
-    hairobb__v4 ox = hairobb__v4_set1(rs->org[0]), oy = hairobb__v4_set1(rs->org[1]), oz = hairobb__v4_set1(rs->org[2]);
+    hairobb__v4 ox = hairobb__v4_set1(rs->org[0] - node->centre[0]), oy = hairobb__v4_set1(rs->org[1] - node->centre[1]);
+    hairobb__v4 oz = hairobb__v4_set1(rs->org[2] - node->centre[2]);
     hairobb__v4 dx = hairobb__v4_set1(rs->dir[0]), dy = hairobb__v4_set1(rs->dir[1]), dz = hairobb__v4_set1(rs->dir[2]);
     int row;
     for (row = 0; row < 3; ++row) {

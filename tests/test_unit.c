@@ -130,9 +130,9 @@ static void test_hair_space(void)
     CHECK(fabsf(hairobb__dot3(frame + 6, dir)) > 0.999f, "hair space z . hair direction = %g", hairobb__dot3(frame + 6, dir));
     for (i = 0; i < n; ++i) {
         float lo[3], hi[3];
-        hairobb__segment_box(vertices + 16 * i, frame, lo, hi);
+        hairobb__segment_box(vertices + 16 * i, frame, NULL, lo, hi);
         area_hair += hairobb__half_area(lo, hi);
-        hairobb__segment_box(vertices + 16 * i, identity, lo, hi);
+        hairobb__segment_box(vertices + 16 * i, identity, NULL, lo, hi);
         area_world += hairobb__half_area(lo, hi);
     }
     CHECK(area_hair < 0.1f * area_world, "hair-space boxes %g vs world boxes %g", area_hair, area_world);
@@ -160,14 +160,18 @@ static int point_in_node(const hairobb_bvh *bvh, uint64_t ref, int lane, const d
             if (p[k] < a->lower[k][lane] || p[k] > a->upper[k][lane]) return 0;
     } else if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_ROTATED) {
         const hairobb__rotated_node *r = (const hairobb__rotated_node *)node;
+        double m[3];
+        for (k = 0; k < 3; ++k) m[k] = p[k] - r->centre[k];
         for (k = 0; k < 3; ++k) {
-            double q = r->rotation[3 * k] * p[0] + r->rotation[3 * k + 1] * p[1] + r->rotation[3 * k + 2] * p[2];
+            double q = r->rotation[3 * k] * m[0] + r->rotation[3 * k + 1] * m[1] + r->rotation[3 * k + 2] * m[2];
             if (q < r->lower[k][lane] || q > r->upper[k][lane]) return 0;
         }
     } else {
         const hairobb__obb_node *o = (const hairobb__obb_node *)node;
+        double m[3];
+        for (k = 0; k < 3; ++k) m[k] = p[k] - o->centre[k];
         for (k = 0; k < 3; ++k) {
-            double q = o->xfm[3 * k][lane] * p[0] + o->xfm[3 * k + 1][lane] * p[1] + o->xfm[3 * k + 2][lane] * p[2] + o->xfm[9 + k][lane];
+            double q = o->xfm[3 * k][lane] * m[0] + o->xfm[3 * k + 1][lane] * m[1] + o->xfm[3 * k + 2][lane] * m[2] + o->xfm[9 + k][lane];
             if (q < 0.0 || q > 1.0) return 0;
         }
     }
