@@ -609,7 +609,7 @@ static void hairobb__choose_hair_space(const hairobb__builder *b, size_t begin, 
         }
         for (i = begin; i < end && area < best_area; i += step) {
             float lower[3], upper[3];
-            hairobb__prim_box(b, b->ids[i], frame, lower, upper);
+            hairobb__prim_box(b, b->ids[i], c == candidates ? NULL : frame, lower, upper);   /* NULL: cached world box */
             area += hairobb__half_area(lower, upper);
         }
         if (area < best_area) { best_area = area; memcpy(best_frame, frame, sizeof frame); }
