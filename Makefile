@@ -59,7 +59,7 @@ compile-matrix: | $(B)
 	    $$cc -x c++ -std=c++11 -Wall -Wextra -pedantic -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
 	    echo "compile-matrix: $$cc $$flags (C99 and C++11) clean"; done; done
 
-test: deps $(TESTS) compile-matrix
+test: deps $(TESTS) compile-matrix examples
 	@sh tests/run_all.sh $(TESTS)
 
 bench: $(B)/bench

@@ -383,6 +383,57 @@ static void test_roots_hidden_in_one_piece(void)
     hairobb_free(bvh);
 }
 
+/* Inputs that defeat the SAH: identical segments (no split separates them)
+   and segments at exponentially growing distances (every split peels off
+   one). Depth must stay bounded, leaves small, and hits those of a loop
+   over all segments. */
+static void test_degenerate_trees(void)
+{
+    size_t n = 3000, i;
+    int scene;
+    for (scene = 0; scene < 2; ++scene) {
+        float *vertices = (float *)malloc(16 * sizeof(float) * n);
+        uint32_t *indices = (uint32_t *)malloc(sizeof(uint32_t) * n);
+        hairobb_bvh *bvh = NULL;
+        hairobb_stats stats;
+        long mismatches = 0, hits = 0;
+        int r, k;
+        for (i = 0; i < n; ++i) {
+            float x = scene == 0 ? 0.0f : (float)pow(1.01, (double)i) - 1.0f;
+            for (k = 0; k < 4; ++k) {
+                float *v = vertices + 16 * i + 4 * k;
+                v[0] = x; v[1] = 0.3f * (float)k; v[2] = 0.05f * (float)(k * (3 - k)); v[3] = 0.01f;
+            }
+            indices[i] = (uint32_t)(4 * i);
+        }
+        CHECK(hairobb_build(vertices, 4 * n, indices, n, NULL, &bvh) == HAIROBB_OK, "degenerate scene %d builds", scene);
+        if (!bvh) continue;
+        hairobb_get_stats(bvh, &stats);
+        printf("degenerate scene %d: depth %u, %zu leaves\n", scene, stats.max_depth, stats.leaves);
+        CHECK(stats.max_depth <= 80, "degenerate scene %d: depth %u", scene, stats.max_depth);
+        CHECK(stats.leaf_references == n && stats.leaves * 4 >= n, "degenerate scene %d: %zu leaves for %zu segments", scene, stats.leaves, n);
+        for (r = 0; r < 400; ++r) {
+            hairobb_ray ray = {{0.0f, 0.0f, -3.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY};
+            hairobb_hit hit;
+            hairobb__ray_state rs;
+            uint32_t p;
+            int brute = 0, got;
+            ray.org[0] = scene == 0 ? 0.02f * (rnd() - 0.5f) : 20.0f * rnd();
+            ray.org[1] = 0.9f * rnd();
+            got = hairobb_intersect1(bvh, &ray, &hit);
+            hairobb__ray_setup(&rs, &ray);
+            for (p = 0; p < n; ++p) brute |= hairobb__intersect_segment(bvh, &rs, p, 0);
+            if (brute != got || (got && hit.t != rs.tfar) || hairobb_occluded1(bvh, &ray) != got) ++mismatches;
+            hits += got;
+        }
+        CHECK(hits > 40, "degenerate scene %d: %ld hits of 400 rays", scene, hits);
+        CHECK(mismatches == 0, "degenerate scene %d: %ld rays where BVH and brute force differ", scene, mismatches);
+        hairobb_free(bvh);
+        free(vertices);
+        free(indices);
+    }
+}
+
 static void test_bad_input(void)
 {
     float *vertices;
@@ -479,6 +530,7 @@ int main(void)
     test_bounds_and_traversal();
     test_hit_attributes();
     test_roots_hidden_in_one_piece();
+    test_degenerate_trees();
     test_bad_input();
     test_allocation_failure();
     return check_summary();
