@@ -10,7 +10,7 @@ LIBS      = -lm
 EMBREE    = -lembree3
 B         = build
 
-TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_scenes $(B)/test_simd $(B)/test_accuracy $(B)/test_far
+TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_unit_w8 $(B)/test_scenes $(B)/test_simd $(B)/test_simd_w8 $(B)/test_accuracy $(B)/test_far
 
 .PHONY: all test deps compile-matrix bench examples clean
 all: $(TESTS) $(B)/bench examples
@@ -27,6 +27,10 @@ $(B)/test_reference: tests/test_reference.c tests/reference.h | $(B)
 $(B)/test_unit: tests/test_unit.c hairobb.h tests/reference.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
 
+# the same white-box tests on 8-wide nodes (HAIROBB_NODE_WIDTH=8)
+$(B)/test_unit_w8: tests/test_unit.c hairobb.h tests/reference.h tests/check.h | $(B)
+	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=8 $< -o $@ $(LIBS)
+
 $(B)/test_scenes: tests/test_scenes.c tests/scenes.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
 
@@ -38,6 +42,16 @@ $(B)/simd_sse.o: tests/simd_variant.c hairobb.h | $(B)
 $(B)/simd_avx.o: tests/simd_variant.c hairobb.h | $(B)
 	$(CC) $(BASE) -mavx2 -DVARIANT=trace_avx -c $< -o $@
 $(B)/test_simd: tests/test_simd.c $(B)/simd_plain.o $(B)/simd_sse.o $(B)/simd_avx.o tests/scenes.h | $(B)
+	$(CC) $(BASE) $(ARCH) $(filter %.c %.o,$^) -o $@ $(LIBS)
+
+# and again with 8-wide nodes
+$(B)/simd_plain_w8.o: tests/simd_variant.c hairobb.h | $(B)
+	$(CC) $(BASE) -DHAIROBB_NODE_WIDTH=8 -DHAIROBB_NO_SIMD -DVARIANT=trace_plain -c $< -o $@
+$(B)/simd_sse_w8.o: tests/simd_variant.c hairobb.h | $(B)
+	$(CC) $(BASE) -DHAIROBB_NODE_WIDTH=8 -msse4.1 -mno-avx -DVARIANT=trace_sse -c $< -o $@
+$(B)/simd_avx_w8.o: tests/simd_variant.c hairobb.h | $(B)
+	$(CC) $(BASE) -DHAIROBB_NODE_WIDTH=8 -mavx2 -DVARIANT=trace_avx -c $< -o $@
+$(B)/test_simd_w8: tests/test_simd.c $(B)/simd_plain_w8.o $(B)/simd_sse_w8.o $(B)/simd_avx_w8.o tests/scenes.h | $(B)
 	$(CC) $(BASE) $(ARCH) $(filter %.c %.o,$^) -o $@ $(LIBS)
 
 $(B)/test_accuracy: tests/test_accuracy.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps
@@ -54,7 +68,7 @@ $(B)/bench: bench/bench.c hairobb.h tests/reference.h tests/scenes.h tests/embre
 compile-matrix: | $(B)
 	@printf '#define HAIROBB_IMPLEMENTATION\n#include "hairobb.h"\nint main(void){return 0;}\n' > $(B)/matrix.c
 	@set -e; for cc in gcc clang; do command -v $$cc >/dev/null || continue; \
-	  for flags in "" "-DHAIROBB_STATIC" "-DHAIROBB_NO_SIMD" "-mavx2"; do \
+	  for flags in "" "-DHAIROBB_STATIC" "-DHAIROBB_NO_SIMD" "-mavx2" "-mavx2 -DHAIROBB_NODE_WIDTH=8" "-DHAIROBB_NO_SIMD -DHAIROBB_NODE_WIDTH=8"; do \
 	    $$cc $(WARN) -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
 	    $$cc -x c++ -std=c++11 -Wall -Wextra -pedantic -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
 	    echo "compile-matrix: $$cc $$flags (C99 and C++11) clean"; done; done

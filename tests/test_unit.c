@@ -211,7 +211,7 @@ static long check_subtree(const hairobb_bvh *bvh, uint64_t ref, box_path *path, 
                                 : HAIROBB__REF_TYPE(ref) == HAIROBB__REF_ROTATED ? ((const hairobb__rotated_node *)node)->child
                                                                                  : ((const hairobb__obb_node *)node)->child;
         int lane;
-        for (lane = 0; lane < 4; ++lane) {
+        for (lane = 0; lane < HAIROBB__W; ++lane) {
             if (child[lane] == HAIROBB__REF_EMPTY) continue;
             path->refs[path->depth] = ref;
             path->lanes[path->depth] = lane;
