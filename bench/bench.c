@@ -114,6 +114,7 @@ typedef struct variant {
     const char *label;   /* name in the tables */
     library lib;
     hairobb_node_policy nodes;
+    hairobb_obb_layout obb_layout;
     hairobb_precision precision;
     unsigned curve_pieces;
     int embree_type, embree_rate; /* rate 0 = Embree's default */
@@ -123,21 +124,22 @@ typedef struct variant {
     int on_chart;        /* a point of the run time against error chart */
 } variant;
 
-#define HAIROBB_ROW(key, label, nodes, precision, pieces, on_chart) \
-    {key, label, LIB_HAIROBB, HAIROBB_NODES_##nodes, HAIROBB_PRECISION_##precision, pieces, 0, 0, 1, on_chart}
+#define HAIROBB_ROW(key, label, nodes, layout, precision, pieces, on_chart) \
+    {key, label, LIB_HAIROBB, HAIROBB_NODES_##nodes, HAIROBB_OBB_##layout, HAIROBB_PRECISION_##precision, pieces, 0, 0, 1, on_chart}
 #define EMBREE_ROW(key, label, type, rate, comparable, on_chart) \
-    {key, label, LIB_EMBREE, HAIROBB_NODES_MIXED, HAIROBB_PRECISION_EXACT, 0, type, rate, comparable, on_chart}
+    {key, label, LIB_EMBREE, HAIROBB_NODES_MIXED, HAIROBB_OBB_PER_CHILD, HAIROBB_PRECISION_EXACT, 0, type, rate, comparable, on_chart}
 static const variant all_variants[] = {
     /* precision points: exact and pieces-only intersectors, 4 to 16 pieces */
-    HAIROBB_ROW("default", "hairobb default", MIXED, EXACT, 8, 1),
-    HAIROBB_ROW("exact4", "hairobb exact 4", MIXED, EXACT, 4, 1),
-    HAIROBB_ROW("exact16", "hairobb exact 16", MIXED, EXACT, 16, 1),
-    HAIROBB_ROW("pieces4", "hairobb pieces 4", MIXED, PIECES, 4, 1),
-    HAIROBB_ROW("pieces8", "hairobb pieces 8", MIXED, PIECES, 8, 1),
-    HAIROBB_ROW("pieces16", "hairobb pieces 16", MIXED, PIECES, 16, 1),
+    HAIROBB_ROW("default", "hairobb default", MIXED, PER_CHILD, EXACT, 8, 1),
+    HAIROBB_ROW("exact4", "hairobb exact 4", MIXED, PER_CHILD, EXACT, 4, 1),
+    HAIROBB_ROW("exact16", "hairobb exact 16", MIXED, PER_CHILD, EXACT, 16, 1),
+    HAIROBB_ROW("pieces4", "hairobb pieces 4", MIXED, PER_CHILD, PIECES, 4, 1),
+    HAIROBB_ROW("pieces8", "hairobb pieces 8", MIXED, PER_CHILD, PIECES, 8, 1),
+    HAIROBB_ROW("pieces16", "hairobb pieces 16", MIXED, PER_CHILD, PIECES, 16, 1),
     /* ablation of the node policy; "mixed" is the default row */
-    HAIROBB_ROW("aabb", "hairobb AABB-only", AABB_ONLY, EXACT, 8, 0),
-    HAIROBB_ROW("obb", "hairobb OBB-only", OBB_ONLY, EXACT, 8, 0),
+    HAIROBB_ROW("aabb", "hairobb AABB-only", AABB_ONLY, PER_CHILD, EXACT, 8, 0),
+    HAIROBB_ROW("obb", "hairobb OBB-only", OBB_ONLY, PER_CHILD, EXACT, 8, 0),
+    HAIROBB_ROW("shared", "hairobb shared rot.", MIXED, SHARED_ROTATION, EXACT, 8, 0),
     EMBREE_ROW("embree-r4", "Embree flat r4", EMB_FLAT_BEZIER, 4, 1, 1),
     EMBREE_ROW("embree-r8", "Embree flat r8", EMB_FLAT_BEZIER, 8, 1, 1),
     EMBREE_ROW("embree-r16", "Embree flat r16", EMB_FLAT_BEZIER, 16, 1, 1),
@@ -148,17 +150,17 @@ enum { VARIANT_COUNT = sizeof all_variants / sizeof all_variants[0] };
 /* The baseline of every ratio, and the rows of the ablation table (the
    paper's three node policies, all with the default exact intersector). */
 #define BASELINE_KEY "embree-r4"
-static const char *const ablation_keys[] = {"aabb", "obb", "default"};
-static const char *const ablation_labels[] = {"AABB-only", "OBB-only", "mixed"};
-enum { ABLATION_ROWS = 3 };
+static const char *const ablation_keys[] = {"aabb", "obb", "default", "shared"};
+static const char *const ablation_labels[] = {"AABB-only", "OBB-only", "mixed", "mixed shared-R"};
+enum { ABLATION_ROWS = 4 };
 
 /* Named groups for --variants; "mixed" is the default variant by another name. */
 static const struct { const char *name, *members; } variant_groups[] = {
-    {"all", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,embree-r4,embree-r8,embree-r16,embree-round"},
-    {"hairobb", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb"},
+    {"all", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,shared,embree-r4,embree-r8,embree-r16,embree-round"},
+    {"hairobb", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,shared"},
     {"embree", "embree-r4,embree-r8,embree-r16,embree-round"},
     {"precision", "default,exact4,exact16,pieces4,pieces8,pieces16"},
-    {"ablation", "aabb,obb,default"},
+    {"ablation", "aabb,obb,default,shared"},
     {"mixed", "default"},
 };
 
@@ -701,6 +703,7 @@ static hairobb_bvh *build_hairobb(const hair_scene *s, const variant *v, double 
     hairobb_build_options build_options;
     memset(&build_options, 0, sizeof build_options);
     build_options.nodes = v->nodes;
+    build_options.obb_layout = v->obb_layout;
     build_options.precision = v->precision;
     build_options.curve_pieces = v->curve_pieces;
     hairobb_bvh *bvh = NULL;
@@ -991,8 +994,8 @@ static void print_ablation_table(const options *o, const scene_result *results, 
     if (!any)
         return;
     char heading[48];
-    printf("\n=== ablation: node types (exact intersector, 8 pieces)\n");
-    printf("%-12s %-10s", "scene", "nodes");
+    printf("\n=== ablation: node types (exact intersector, 8 pieces; shared-R: one rotation per OBB node)\n");
+    printf("%-12s %-14s", "scene", "nodes");
     for (int k = RAYS_PRIMARY; k <= RAYS_INCOHERENT; k++)
         for (int t = 0; t < o->thread_count_count && o->ray_kind_enabled[k]; t++) {
             snprintf(heading, sizeof heading, "%s %ut", ray_kind_names[k], o->thread_counts[t]);
@@ -1008,7 +1011,7 @@ static void print_ablation_table(const options *o, const scene_result *results, 
             const variant_result *r = &results[s].variants[i];
             if (!selected[i] || !r->measured)
                 continue;
-            printf("%-12s %-10s", first ? results[s].name : "", ablation_labels[a]);
+            printf("%-12s %-14s", first ? results[s].name : "", ablation_labels[a]);
             first = 0;
             for (int k = RAYS_PRIMARY; k <= RAYS_INCOHERENT; k++)
                 for (int t = 0; t < o->thread_count_count && o->ray_kind_enabled[k]; t++)
@@ -1269,7 +1272,7 @@ static void print_help(void)
            "  --rays LIST         ray sets: primary, incoherent, shadow (default all)\n"
            "  --threads LIST      thread counts, e.g. 1,8 (default 1 and the number of cores)\n"
            "  --variants LIST     variants or groups (default all):\n"
-           "                      hairobb: default (= mixed), exact4, exact16, pieces4, pieces8, pieces16, aabb, obb\n"
+           "                      hairobb: default (= mixed), exact4, exact16, pieces4, pieces8, pieces16, aabb, obb, shared\n"
            "                      Embree: embree-r4, embree-r8, embree-r16 (flat), embree-round\n"
            "                      groups: all, hairobb, embree, precision, ablation\n"
            "  --passes N          timed passes per measurement, median reported (default %d, 3..64)\n"
