@@ -434,6 +434,49 @@ static void test_degenerate_trees(void)
     }
 }
 
+/* Rays with NaN or infinite components miss cleanly (no crash, no hang, no
+   hit with garbage attributes); infinite tfar and tnear = -inf are valid. */
+static void test_bad_rays(void)
+{
+    size_t n = 2000;
+    float *vertices;
+    uint32_t *indices;
+    hairobb_bvh *bvh;
+    hairobb_ray base;
+    hairobb_hit hit;
+    int found = 0, tries, component, bad = 0;
+    make_scene(n, &vertices, &indices);
+    CHECK(hairobb_build(vertices, 4 * n, indices, n, NULL, &bvh) == HAIROBB_OK, "build");
+    for (tries = 0; tries < 1000 && !found; ++tries) {
+        base = random_ray();
+        found = hairobb_intersect1(bvh, &base, &hit);
+    }
+    CHECK(found, "a ray that hits");
+    for (component = 0; component < 8; ++component) {
+        int value;
+        for (value = 0; value < 3; ++value) {
+            static const float values[3] = {NAN, INFINITY, -INFINITY};
+            hairobb_ray ray = base;
+            float *f = component < 3 ? &ray.org[component] : component == 3 ? &ray.tnear
+                     : component < 7 ? &ray.dir[component - 4] : &ray.tfar;
+            int got, occluded, valid;
+            *f = values[value];
+            /* still a valid ray: tnear = -inf, tfar = +inf */
+            valid = (component == 3 && value == 2) || (component == 7 && value == 1);
+            got = hairobb_intersect1(bvh, &ray, &hit);
+            occluded = hairobb_occluded1(bvh, &ray);
+            if (valid ? !(got && occluded && isfinite(hit.t)) : (got || occluded || hit.prim_id != HAIROBB_INVALID_ID)) {
+                ++bad;
+                printf("component %d value %g: hit %d occluded %d\n", component, values[value], got, occluded);
+            }
+        }
+    }
+    CHECK(bad == 0, "%d bad-ray cases misbehaved", bad);
+    hairobb_free(bvh);
+    free(vertices);
+    free(indices);
+}
+
 static void test_bad_input(void)
 {
     float *vertices;
@@ -531,6 +574,7 @@ int main(void)
     test_hit_attributes();
     test_roots_hidden_in_one_piece();
     test_degenerate_trees();
+    test_bad_rays();
     test_bad_input();
     test_allocation_failure();
     return check_summary();
