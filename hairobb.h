@@ -2,12 +2,13 @@
    single-file C library, public domain or MIT (see the end of the file)
 
    WHAT IT DOES
-     Builds a 4-wide (or 8-wide) bounding volume hierarchy over cubic Bezier hair segments
-     and intersects rays with them. Groups of neighbouring hairs point the same
-     way, so boxes oriented along the hair ("hair space") bound them far more
-     tightly than axis-aligned boxes; the builder decides per node, by the
-     surface area heuristic, whether an axis-aligned (AABB) or an oriented
-     (OBB) node pays (Woop, Benthin, Wald, Johnson, Tabellion, HPG 2014).
+     Builds a 4-wide (or 8-wide) bounding volume hierarchy over cubic Bezier
+     hair segments and intersects rays with them. Groups of neighbouring
+     hairs point the same way, so boxes oriented along the hair ("hair space")
+     bound them far more tightly than axis-aligned boxes; the builder decides
+     per node, by the surface area heuristic, whether an axis-aligned (AABB)
+     or an oriented (OBB) node pays (Woop, Benthin, Wald, Johnson, Tabellion,
+     HPG 2014).
 
    HOW TO USE
      In exactly one C or C++ file:
@@ -65,11 +66,19 @@
      hair_space_candidates   rotations tried per node (main directions of
                              sampled segments), 0 = 4, at most 16.
      curve_pieces            linear pieces per segment in the intersector's
-                             first test, 0 = 8, at most 16.
+                             first test, 0 = 8, at most 16 (with the exact
+                             precision it changes speed, not the hits).
      precision               HAIROBB_PRECISION_EXACT (default): roots refined to
                              the surface above. HAIROBB_PRECISION_PIECES: the
                              linear pieces alone, faster, less accurate.
      allocator_user          passed to HAIROBB_MALLOC/HAIROBB_FREE.
+
+   HITS
+     hairobb_hit: t, u, v as above; Ng the ribbon's unit normal facing the ray
+     origin; tangent = P'(u) in world space; prim_id the segment index.
+     Every hit with t in [tnear, tfar] counts, including the ribbon a
+     secondary ray starts on (unlike Embree, nothing is dropped near t = 0):
+     start such rays with tnear a few radii (over |dir|) past 0.
 
    THREAD SAFETY
      hairobb_intersect1/hairobb_occluded1 only read the BVH: any number of
@@ -136,10 +145,10 @@ typedef enum hairobb_precision {
     HAIROBB_PRECISION_PIECES      /* linear pieces only (like Embree's flat curves) */
 } hairobb_precision;
 
-/* How an OBB node stores its 4 boxes. */
+/* How an OBB node stores its child boxes (sizes for 4-wide nodes). */
 typedef enum hairobb_obb_layout {
     HAIROBB_OBB_PER_CHILD = 0,       /* an affine map per child (the paper's uncompressed node): 240 bytes */
-    HAIROBB_OBB_SHARED_ROTATION      /* one rotation per node, 4 boxes in it: 176 bytes */
+    HAIROBB_OBB_SHARED_ROTATION      /* one rotation per node, the boxes in it: 176 bytes */
 } hairobb_obb_layout;
 
 typedef struct hairobb_build_options {
@@ -493,7 +502,7 @@ typedef struct hairobb__aabb_node {
 
 /* Four oriented child boxes, each an affine map of world space onto the unit
    cube: unit = M * (p - centre) + m, with xfm[0..8] = M row-major and
-   xfm[9..11] = m, each entry holding the 4 children. Subtracting a centre
+   xfm[9..11] = m, each entry holding all children. Subtracting a centre
    near the node first keeps the transform's rounding proportional to the
    distance between ray origin and node, not to their distance from the
    world origin: 240 bytes. */
@@ -670,7 +679,7 @@ static void hairobb__choose_hair_space(const hairobb__builder *b, size_t begin, 
 }
 
 /* ------------------------------------------------------------------------ */
-/* Builder: binned SAH in world space and in hair space, 4-wide filling      */
+/* Builder: binned SAH in world space and in hair space, filling W children */
 /* ------------------------------------------------------------------------ */
 typedef struct hairobb__split {
     float cost;                 /* FLT_MAX: no split found */
@@ -911,8 +920,8 @@ static uint64_t hairobb__build_range(hairobb__builder *b, size_t begin, size_t e
 /* SAH cost of a leaf, on the scale of hairobb__bin_split's costs */
 static float hairobb__leaf_cost(size_t count, float area) { return HAIROBB__COST_SEGMENT * (float)count * area; }
 
-/* Builds a 4-wide node over ids[begin, end): split the child with the largest
-   area until there are 4; the node is OBB where a hair-space split won. */
+/* Builds a node over ids[begin, end): split the child with the largest
+   area until there are W; the node is OBB where a hair-space split won. */
 static uint64_t hairobb__build_node(hairobb__builder *b, size_t begin, size_t end, unsigned depth,
                                     const hairobb__split *first_split)
 {
@@ -985,7 +994,7 @@ static uint64_t hairobb__build_node(hairobb__builder *b, size_t begin, size_t en
             node->child[i] = i < count ? refs[i] : HAIROBB__REF_EMPTY;
         }
     } else {
-        /* AABB and rotated nodes: 4 boxes in one frame (world axes, no centre, for AABB) */
+        /* AABB and rotated nodes: all boxes in one frame (world axes, no centre, for AABB) */
         float frame[9], (*lower)[HAIROBB__W], (*upper)[HAIROBB__W];
         const float *centre = NULL;
         uint64_t *child;
