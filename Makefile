@@ -34,23 +34,18 @@ $(B)/test_unit_w8: tests/test_unit.c hairobb.h tests/reference.h tests/check.h |
 $(B)/test_scenes: tests/test_scenes.c tests/scenes.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
 
-# the same tracing code compiled three ways: plain C, SSE only, AVX; with
-# 4-wide nodes here, 8-wide below (the width is fixed so the trees match)
-$(B)/simd_plain.o: tests/simd_variant.c hairobb.h | $(B)
-	$(CC) $(BASE) -DHAIROBB_NODE_WIDTH=4 -DHAIROBB_NO_SIMD -DVARIANT=trace_plain -c $< -o $@
-$(B)/simd_sse.o: tests/simd_variant.c hairobb.h | $(B)
-	$(CC) $(BASE) -DHAIROBB_NODE_WIDTH=4 -msse4.1 -mno-avx -DVARIANT=trace_sse -c $< -o $@
-$(B)/simd_avx.o: tests/simd_variant.c hairobb.h | $(B)
-	$(CC) $(BASE) -DHAIROBB_NODE_WIDTH=4 -mavx2 -DVARIANT=trace_avx -c $< -o $@
-$(B)/test_simd: tests/test_simd.c $(B)/simd_plain.o $(B)/simd_sse.o $(B)/simd_avx.o tests/scenes.h | $(B)
+# the same tracing code compiled three ways (plain C, SSE only, AVX) for each
+# node width: simd_<path>_w<width>.o, the width fixed so the trees match
+SIMD_FLAGS_plain = -DHAIROBB_NO_SIMD
+SIMD_FLAGS_sse   = -msse4.1 -mno-avx
+SIMD_FLAGS_avx   = -mavx2
+simd_path  = $(word 1,$(subst _, ,$*))
+simd_width = $(subst w,,$(word 2,$(subst _, ,$*)))
+.PRECIOUS: $(B)/simd_%.o
+$(B)/simd_%.o: tests/simd_variant.c hairobb.h | $(B)
+	$(CC) $(BASE) $(SIMD_FLAGS_$(simd_path)) -DHAIROBB_NODE_WIDTH=$(simd_width) -DVARIANT=trace_$(simd_path) -c $< -o $@
+$(B)/test_simd: tests/test_simd.c $(B)/simd_plain_w4.o $(B)/simd_sse_w4.o $(B)/simd_avx_w4.o tests/scenes.h | $(B)
 	$(CC) $(BASE) $(ARCH) $(filter %.c %.o,$^) -o $@ $(LIBS)
-
-$(B)/simd_plain_w8.o: tests/simd_variant.c hairobb.h | $(B)
-	$(CC) $(BASE) -DHAIROBB_NODE_WIDTH=8 -DHAIROBB_NO_SIMD -DVARIANT=trace_plain -c $< -o $@
-$(B)/simd_sse_w8.o: tests/simd_variant.c hairobb.h | $(B)
-	$(CC) $(BASE) -DHAIROBB_NODE_WIDTH=8 -msse4.1 -mno-avx -DVARIANT=trace_sse -c $< -o $@
-$(B)/simd_avx_w8.o: tests/simd_variant.c hairobb.h | $(B)
-	$(CC) $(BASE) -DHAIROBB_NODE_WIDTH=8 -mavx2 -DVARIANT=trace_avx -c $< -o $@
 $(B)/test_simd_w8: tests/test_simd.c $(B)/simd_plain_w8.o $(B)/simd_sse_w8.o $(B)/simd_avx_w8.o tests/scenes.h | $(B)
 	$(CC) $(BASE) $(ARCH) $(filter %.c %.o,$^) -o $@ $(LIBS)
 
