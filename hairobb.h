@@ -1177,6 +1177,7 @@ HAIROBB_DEF void hairobb_get_stats(const hairobb_bvh *bvh, hairobb_stats *stats)
 
 HAIROBB_DEF void hairobb_bounds(const hairobb_bvh *bvh, float lower[3], float upper[3])
 {
+    if (!bvh || !lower || !upper) return;
     memcpy(lower, bvh->lower, sizeof bvh->lower);
     memcpy(upper, bvh->upper, sizeof bvh->upper);
 }
@@ -1516,27 +1517,29 @@ static int hairobb__piece_hit(hairobb__ray_state *rs, const hairobb__ray_curve *
 }
 
 /* The pieces stage of one segment that survived the cull, c in ray space. */
-static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *rs, const hairobb__ray_curve *c,
-                                    uint32_t prim, int any_hit)
+/* A piece of parameter length h strays from its chord by at most
+   h^2/8 max|P''| and |P''| <= 6 max|second difference|: widening the chord
+   test by that (and the same for r), plus rounding of the evaluated points,
+   misses no root of the ribbon. */
+static float hairobb__chord_pad(const hairobb__ray_curve *c, int pieces)
 {
-    hairobb__ray_poly poly;
-    int have_poly = 0;
-    float bend, bend_r, pad, magnitude = 0.0f;
-    int i, chunk, found = 0;
-
-    /* A piece of parameter length h strays from its chord by at most
-       h^2/8 max|P''| and |P''| <= 6 max|second difference|: widen the chord
-       test by that (and the same for r) so no root of the ribbon is missed;
-       plus rounding of the evaluated points. */
-    bend = 0.0f; bend_r = 0.0f;
+    float bend = 0.0f, bend_r = 0.0f, magnitude = 0.0f;
+    int i;
     for (i = 0; i < 2; ++i) {
         float ddx = c->x[i] - 2.0f * c->x[i + 1] + c->x[i + 2], ddy = c->y[i] - 2.0f * c->y[i + 1] + c->y[i + 2];
         bend = hairobb__maxf(bend, sqrtf(ddx * ddx + ddy * ddy));
         bend_r = hairobb__maxf(bend_r, fabsf(c->r[i] - 2.0f * c->r[i + 1] + c->r[i + 2]));
     }
     for (i = 0; i < 4; ++i) magnitude = hairobb__maxf(magnitude, hairobb__maxf(fabsf(c->x[i]), fabsf(c->y[i])));
-    pad = (bend + bend_r) * (0.75f / (float)(bvh->pieces * bvh->pieces)) + magnitude * (8.0f * FLT_EPSILON);
-    if (bvh->precision == HAIROBB_PRECISION_PIECES) pad = 0.0f;
+    return (bend + bend_r) * (0.75f / (float)(pieces * pieces)) + magnitude * (8.0f * FLT_EPSILON);
+}
+
+static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *rs, const hairobb__ray_curve *c,
+                                    uint32_t prim, int any_hit)
+{
+    hairobb__ray_poly poly;
+    int have_poly = 0, chunk, found = 0;
+    float pad = bvh->precision == HAIROBB_PRECISION_PIECES ? 0.0f : hairobb__chord_pad(c, bvh->pieces);
 
     for (chunk = 0; chunk < bvh->piece_chunks; ++chunk) {
         const float (*w)[4][8] = bvh->piece_weights[chunk];
