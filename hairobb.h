@@ -56,12 +56,26 @@
    BUILD OPTIONS (hairobb_build_options; a zero-initialised struct = defaults)
      nodes                   HAIROBB_NODES_MIXED (default): AABB or OBB per node
                              by SAH; _AABB_ONLY and _OBB_ONLY for comparisons.
-     obb_layout              HAIROBB_OBB_PER_CHILD (default): each child box has
-                             its own hair space, an affine map onto the unit
-                             cube; HAIROBB_OBB_SHARED_ROTATION: the ray is
-                             rotated once per node into the node's hair space
-                             (176 instead of 240 bytes per 4-wide node; on
-                             combed fur, 8-wide: 32% less memory, 14% slower).
+     obb_layout              HAIROBB_OBB_DEFAULT = _COMPRESSED: every node keeps
+                             its child boxes as signed bytes in one frame (a
+                             byte rotation for OBB nodes): 96/160 bytes per
+                             4-/8-wide node. _PER_CHILD: the paper's
+                             uncompressed node, an affine map per child
+                             (240/464 bytes); _SHARED_ROTATION: one float
+                             rotation per node (176/304 bytes). On combed fur
+                             and straight.hair, 8-wide: compressed 27.9/26.6
+                             bytes per segment, per-child 72.5/69.0, at
+                             12-15% less speed (bench, see README).
+     spatial_splits          HAIROBB_AUTO (= off), _ON, _OFF: also try split
+                             planes that clip segments (world and hair space);
+                             a clipped segment is referenced by the leaves of
+                             both sides.
+     spatial_split_budget    extra references spatial splits may add, as a
+                             fraction of the segment count: 0 = 0.25, at most 4.
+     clustering              HAIROBB_AUTO (= off), _ON, _OFF: also try splitting
+                             by similar orientation (two main directions).
+                             Spatial splits and clustering stop being tried in
+                             a subtree where they lost 3 splits in a row.
      max_leaf_size           segments per leaf at most, 0 = 4, at most 15.
      hair_space_candidates   rotations tried per node (main directions of
                              sampled segments), 0 = 4, at most 16.
@@ -72,6 +86,9 @@
                              the surface above. HAIROBB_PRECISION_PIECES: the
                              linear pieces alone, faster, less accurate.
      allocator_user          passed to HAIROBB_MALLOC/HAIROBB_FREE.
+     progress, progress_user progress(progress_user, fraction) is called as the
+                             build goes (fraction rising to exactly 1); a
+                             nonzero return cancels: HAIROBB_ERROR_CANCELLED.
 
    HITS
      hairobb_hit: t, u, v as above; Ng the ribbon's unit normal facing the ray
@@ -128,7 +145,8 @@ typedef enum hairobb_result {
     HAIROBB_ERROR_INDEX_OUT_OF_RANGE, /* indices[i] + 3 >= vertex_count */
     HAIROBB_ERROR_INVALID_GEOMETRY,   /* NaN/Inf or |coordinate| > 1e18, negative radius */
     HAIROBB_ERROR_OUT_OF_MEMORY,      /* HAIROBB_MALLOC returned NULL */
-    HAIROBB_ERROR_TOO_LARGE           /* counts whose byte sizes overflow, > 2^32-1 segments */
+    HAIROBB_ERROR_TOO_LARGE,          /* counts whose byte sizes overflow, > 2^32-1 segments */
+    HAIROBB_ERROR_CANCELLED           /* the progress callback asked to stop */
 } hairobb_result;
 
 HAIROBB_DEF const char *hairobb_result_string(hairobb_result r);
@@ -144,11 +162,24 @@ typedef enum hairobb_precision {
     HAIROBB_PRECISION_PIECES      /* linear pieces only (like Embree's flat curves) */
 } hairobb_precision;
 
-/* How an OBB node stores its child boxes (sizes for 4-wide nodes). */
+/* How an OBB node stores its child boxes (sizes for 4-/8-wide nodes). */
 typedef enum hairobb_obb_layout {
-    HAIROBB_OBB_PER_CHILD = 0,       /* an affine map per child (the paper's uncompressed node): 240 bytes */
-    HAIROBB_OBB_SHARED_ROTATION      /* one rotation per node, the boxes in it: 176 bytes */
+    HAIROBB_OBB_DEFAULT = 0,         /* the layout the bench recommends (see BUILD OPTIONS) */
+    HAIROBB_OBB_PER_CHILD,           /* an affine map per child (the paper's uncompressed node): 240/464 bytes */
+    HAIROBB_OBB_SHARED_ROTATION,     /* one float rotation per node, float boxes in it: 176/304 bytes */
+    HAIROBB_OBB_COMPRESSED           /* one byte rotation, byte boxes; AABB nodes quantised too: 96/160 bytes */
 } hairobb_obb_layout;
+
+/* A heuristic left to the library's recommendation, forced on, or off. */
+typedef enum hairobb_switch {
+    HAIROBB_AUTO = 0,
+    HAIROBB_ON,
+    HAIROBB_OFF
+} hairobb_switch;
+
+/* Called during a build with the fraction done (0..1, increasing);
+   returning nonzero cancels the build (HAIROBB_ERROR_CANCELLED). */
+typedef int (*hairobb_progress_fn)(void *user, float fraction);
 
 typedef struct hairobb_build_options {
     hairobb_node_policy nodes;
@@ -158,6 +189,12 @@ typedef struct hairobb_build_options {
     unsigned curve_pieces;           /* 0 = 8; 1..16 */
     hairobb_precision precision;
     void *allocator_user;
+    hairobb_switch spatial_splits;   /* clip segments at split planes */
+    float spatial_split_budget;      /* extra segment references allowed, a fraction of the
+                                        segment count; 0 = 0.25; at most 4 */
+    hairobb_switch clustering;       /* similar-orientation clustering */
+    hairobb_progress_fn progress;    /* NULL: none */
+    void *progress_user;
 } hairobb_build_options;
 
 typedef struct hairobb_bvh hairobb_bvh;
@@ -235,6 +272,9 @@ HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray
 #if !defined(HAIROBB_NO_SIMD) && (defined(__SSE2__) || defined(_M_X64))
 #define HAIROBB__SSE 1
 #include <emmintrin.h>
+#if defined(__SSE4_1__)
+#include <smmintrin.h>
+#endif
 #if defined(__AVX__)
 #define HAIROBB__AVX 1
 #include <immintrin.h>
@@ -271,12 +311,14 @@ HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray
 #define HAIROBB__STACK ((HAIROBB__W - 1) * (HAIROBB__SAH_DEPTH + 32) + 1)  /* pushes per level x depth */
 #define HAIROBB__SAMPLE 64              /* segments sampled to rank hair-space candidates */
 /* Relative costs of testing one child box and intersecting one segment.
-   An OBB child costs a 3x4 transform of the ray before its slab test. */
+   OBB over AABB is measured: callgrind, instructions per node visit, 8-wide,
+   combed fur: per-child affine, shared-rotation and compressed OBB nodes
+   all cost 1.6-1.7 AABB node visits (the ray transform). */
 #ifndef HAIROBB__COST_AABB
 #define HAIROBB__COST_AABB 1.0f
 #endif
 #ifndef HAIROBB__COST_OBB
-#define HAIROBB__COST_OBB 2.0f
+#define HAIROBB__COST_OBB 1.6f
 #endif
 #ifndef HAIROBB__COST_SEGMENT
 #define HAIROBB__COST_SEGMENT 4.0f
@@ -289,6 +331,8 @@ HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray
 #define HAIROBB__REF_LEAF 2u
 #define HAIROBB__REF_EMPTY 3u
 #define HAIROBB__REF_ROTATED 4u
+#define HAIROBB__REF_QAABB 5u          /* compressed node, axis-aligned */
+#define HAIROBB__REF_QOBB 6u           /* compressed node, rotated */
 #define HAIROBB__REF_TYPE(ref) ((unsigned)((ref) & 15u))
 
 /* ------------------------------------------------------------------------ */
@@ -362,6 +406,14 @@ static float hairobb__bezier(const float c[4], float u, float *d1, float *d2)
     return s * s * s * c[0] + 3.0f * u * s * s * c[1] + 3.0f * u * u * s * c[2] + u * u * u * c[3];
 }
 
+/* Coordinate k of a segment (control points x, y, z, r each) at u. */
+static float hairobb__bezier4(const float *cp, int k, float u)
+{
+    float c[4];
+    c[0] = cp[k]; c[1] = cp[4 + k]; c[2] = cp[8 + k]; c[3] = cp[12 + k];
+    return hairobb__bezier(c, u, NULL, NULL);
+}
+
 /* ------------------------------------------------------------------------ */
 /* SIMD: 4 or 8 lanes for nodes, 8 for curve points (inline, as a build    */
 /* uses only some). Each operation has a plain C twin with the same         */
@@ -388,6 +440,19 @@ static inline hairobb__v4 hairobb__v4_nonzero(hairobb__v4 x, float tiny)
     __m128 replacement = _mm_or_ps(sign, _mm_set1_ps(tiny));
     return _mm_or_ps(_mm_and_ps(small, replacement), _mm_andnot_ps(small, x));
 }
+#if defined(__SSE4_1__)
+static inline hairobb__v4 hairobb__v4_from_bytes(const signed char *q)
+{
+    int packed;
+    memcpy(&packed, q, sizeof packed);
+    return _mm_cvtepi32_ps(_mm_cvtepi8_epi32(_mm_cvtsi32_si128(packed)));
+}
+#else
+static inline hairobb__v4 hairobb__v4_from_bytes(const signed char *q)
+{
+    return _mm_setr_ps((float)q[0], (float)q[1], (float)q[2], (float)q[3]);
+}
+#endif
 #else
 typedef struct hairobb__v4 { float f[4]; } hairobb__v4;
 #define HAIROBB__V4_MAP(expr) hairobb__v4 r; int i; for (i = 0; i < 4; ++i) r.f[i] = (expr); return r
@@ -403,6 +468,7 @@ static inline hairobb__v4 hairobb__v4_nonzero(hairobb__v4 x, float tiny)
 {
     HAIROBB__V4_MAP(fabsf(x.f[i]) < tiny ? (signbit(x.f[i]) ? -tiny : tiny) : x.f[i]);
 }
+static inline hairobb__v4 hairobb__v4_from_bytes(const signed char *q) { HAIROBB__V4_MAP((float)q[i]); }
 #undef HAIROBB__V4_MAP
 static inline int hairobb__v4_le_bits(hairobb__v4 a, hairobb__v4 b)
 {
@@ -425,6 +491,17 @@ static inline hairobb__v8 hairobb__v8_min(hairobb__v8 a, hairobb__v8 b) { return
 static inline hairobb__v8 hairobb__v8_max(hairobb__v8 a, hairobb__v8 b) { return _mm256_max_ps(a, b); }
 static inline int hairobb__v8_le_bits(hairobb__v8 a, hairobb__v8 b) { return _mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LE_OQ)); }
 static inline void hairobb__v8_store(float *p, hairobb__v8 a) { _mm256_storeu_ps(p, a); }
+#if defined(__AVX2__)
+static inline hairobb__v8 hairobb__v8_from_bytes(const signed char *q)
+{
+    return _mm256_cvtepi32_ps(_mm256_cvtepi8_epi32(_mm_loadl_epi64((const __m128i *)(const void *)q)));
+}
+#else
+static inline hairobb__v8 hairobb__v8_from_bytes(const signed char *q)
+{
+    return _mm256_set_m128(hairobb__v4_from_bytes(q + 4), hairobb__v4_from_bytes(q));
+}
+#endif
 static inline hairobb__v8 hairobb__v8_nonzero(hairobb__v8 x, float tiny)
 {
     __m256 sign = _mm256_and_ps(x, _mm256_set1_ps(-0.0f));
@@ -447,6 +524,13 @@ static inline hairobb__v8 hairobb__v8_max(hairobb__v8 a, hairobb__v8 b) { HAIROB
 #undef HAIROBB__V8_PAIR
 static inline int hairobb__v8_le_bits(hairobb__v8 a, hairobb__v8 b) { return hairobb__v4_le_bits(a.lo, b.lo) | (hairobb__v4_le_bits(a.hi, b.hi) << 4); }
 static inline void hairobb__v8_store(float *p, hairobb__v8 a) { hairobb__v4_store(p, a.lo); hairobb__v4_store(p + 4, a.hi); }
+static inline hairobb__v8 hairobb__v8_from_bytes(const signed char *q)
+{
+    hairobb__v8 r;
+    r.lo = hairobb__v4_from_bytes(q);
+    r.hi = hairobb__v4_from_bytes(q + 4);
+    return r;
+}
 static inline hairobb__v8 hairobb__v8_nonzero(hairobb__v8 x, float tiny)
 {
     hairobb__v8 r;
@@ -470,6 +554,7 @@ typedef hairobb__v8 hairobb__vn;
 #define hairobb__vn_le_bits hairobb__v8_le_bits
 #define hairobb__vn_store hairobb__v8_store
 #define hairobb__vn_nonzero hairobb__v8_nonzero
+#define hairobb__vn_from_bytes hairobb__v8_from_bytes
 #elif HAIROBB__W == 4
 typedef hairobb__v4 hairobb__vn;
 #define hairobb__vn_load hairobb__v4_load
@@ -483,6 +568,7 @@ typedef hairobb__v4 hairobb__vn;
 #define hairobb__vn_le_bits hairobb__v4_le_bits
 #define hairobb__vn_store hairobb__v4_store
 #define hairobb__vn_nonzero hairobb__v4_nonzero
+#define hairobb__vn_from_bytes hairobb__v4_from_bytes
 #else
 #error "HAIROBB_NODE_WIDTH must be 4 or 8"
 #endif
@@ -527,6 +613,19 @@ typedef struct hairobb__rotated_node {
     uint64_t child[HAIROBB__W];
 } hairobb__rotated_node;
 
+/* The paper's compressed node: the boxes of all children in one hair space
+   (a rotation quantised to signed bytes, R = q / 127; the identity for an
+   axis-aligned node) around a float centre, each child box as signed bytes
+   times a per-axis float step, rounded outward: 96 bytes 4-wide, 160 8-wide. */
+typedef struct hairobb__compressed_node {
+    float centre[3], step[3];
+    signed char rotation[9];          /* rows of the frame times 127 */
+    signed char lower[3][HAIROBB__W], upper[3][HAIROBB__W];   /* [axis][child] in steps */
+    unsigned char pad[HAIROBB__W == 8 ? 15 : 7];              /* child[] at a multiple of 16 */
+    uint64_t child[HAIROBB__W];
+} hairobb__compressed_node;
+typedef char hairobb__compressed_node_size[sizeof(hairobb__compressed_node) == (HAIROBB__W == 8 ? 160 : 96) ? 1 : -1];
+
 struct hairobb_bvh {
     const float *vertices;
     const uint32_t *indices;
@@ -558,6 +657,7 @@ HAIROBB_DEF const char *hairobb_result_string(hairobb_result r)
     case HAIROBB_ERROR_INVALID_GEOMETRY: return "invalid geometry (NaN, infinite or huge coordinate, or negative radius)";
     case HAIROBB_ERROR_OUT_OF_MEMORY: return "out of memory";
     case HAIROBB_ERROR_TOO_LARGE: return "input too large (size overflow or more than 2^32-1 segments)";
+    case HAIROBB_ERROR_CANCELLED: return "build cancelled by the progress callback";
     }
     return "unknown hairobb_result";
 }
@@ -610,177 +710,366 @@ static void hairobb__segment_box(const float *cp, const float frame[9], const fl
 /* ------------------------------------------------------------------------ */
 /* Hair space                                                                */
 /* ------------------------------------------------------------------------ */
+/* A reference is a segment, or the part [u0, u1] of one that spatial splits
+   clipped. The builder keeps them in arrays indexed by position; a range of
+   positions [begin, end) owns the slack [end, cap) that its spatial splits
+   may fill with the extra references they create. */
+typedef struct hairobb__range {
+    size_t begin, end, cap;
+} hairobb__range;
+
+/* heuristics a subtree still tries (see hairobb__update_tries) */
+#define HAIROBB__TRY_HAIR_SPACE 1u
+#define HAIROBB__TRY_SPATIAL 2u
+#define HAIROBB__TRY_CLUSTER 4u
+#ifndef HAIROBB__STRIKES
+#define HAIROBB__STRIKES 3      /* see hairobb__update_tries */
+#endif
+typedef struct hairobb__tries {
+    unsigned enabled;
+    unsigned char losses[3];    /* splits lost in a row, per heuristic bit */
+} hairobb__tries;
+
 typedef struct hairobb__builder {
     const float *vertices;
     const uint32_t *indices;
-    float *world_boxes;               /* 6 per segment: lower, upper */
-    float *frame_boxes;               /* 6 per position of ids: boxes in the frame being binned */
-    uint32_t *ids;                    /* partitioned in place; becomes leaf_prims */
+    uint32_t *ids;                    /* segment of each position */
+    float *ranges;                    /* u0, u1 per position */
+    float *world_boxes;               /* 6 per position: lower, upper */
+    float *frame_boxes;               /* 6 per position: boxes in the frame being binned */
+    size_t capacity;                  /* positions */
+    uint32_t *leaf_prims;             /* output: segment ids, in leaf order */
+    size_t leaf_count;
     unsigned char *node_allocation, *nodes;
     size_t node_bytes, node_capacity;
     void *user;
     hairobb_node_policy policy;
     hairobb_obb_layout obb_layout;
     unsigned max_leaf, candidates;
+    hairobb_progress_fn progress;
+    void *progress_user;
+    size_t positions_done, next_report;
     hairobb_stats stats;
-    int out_of_memory;
+    hairobb_result error;             /* first failure; the build unwinds */
 } hairobb__builder;
 
-static const float *hairobb__control_points(const hairobb__builder *b, uint32_t id)
+/* Control points (x, y, z, r each) of the reference at position i: the
+   caller's, or those of its clipped part, computed in double from the
+   blossom of the segment so the float hull still holds the curve. */
+static const float *hairobb__ref_points(const hairobb__builder *b, size_t i, float scratch[16])
 {
-    return b->vertices + 4 * (size_t)b->indices[id];
+    const float *cp = b->vertices + 4 * (size_t)b->indices[b->ids[i]];
+    double u0 = b->ranges[2 * i], u1 = b->ranges[2 * i + 1];
+    int point, k;
+    if (u0 == 0.0 && u1 == 1.0) return cp;
+    for (point = 0; point < 4; ++point) {
+        /* blossom B(t1, t2, t3) with the t's u0 or u1: point 0 = (u0,u0,u0), 3 = (u1,u1,u1) */
+        double t[3];
+        t[0] = point >= 3 ? u1 : u0;
+        t[1] = point >= 2 ? u1 : u0;
+        t[2] = point >= 1 ? u1 : u0;
+        for (k = 0; k < 4; ++k) {
+            double c[4];
+            int level, j;
+            for (j = 0; j < 4; ++j) c[j] = cp[4 * j + k];
+            for (level = 0; level < 3; ++level)
+                for (j = 0; j < 3 - level; ++j) c[j] = (1.0 - t[level]) * c[j] + t[level] * c[j + 1];
+            scratch[4 * point + k] = (float)c[0];
+        }
+    }
+    return scratch;
 }
 
-static void hairobb__prim_box(const hairobb__builder *b, uint32_t id, const float *frame,
+static void hairobb__prim_box(const hairobb__builder *b, size_t i, const float *frame,
                               float lower[3], float upper[3])
 {
     if (!frame) {
-        memcpy(lower, b->world_boxes + 6 * (size_t)id, 3 * sizeof(float));
-        memcpy(upper, b->world_boxes + 6 * (size_t)id + 3, 3 * sizeof(float));
+        memcpy(lower, b->world_boxes + 6 * i, 3 * sizeof(float));
+        memcpy(upper, b->world_boxes + 6 * i + 3, 3 * sizeof(float));
     } else {
-        hairobb__segment_box(hairobb__control_points(b, id), frame, NULL, lower, upper);
+        float scratch[16];
+        hairobb__segment_box(hairobb__ref_points(b, i, scratch), frame, NULL, lower, upper);
     }
 }
 
-/* Rotation whose z axis is the main direction (first to last control point)
-   of segment id; 0 if the segment has no direction. */
-static int hairobb__segment_frame(const hairobb__builder *b, uint32_t id, float frame[9])
+/* Unit main direction (first to last control point) of the reference at
+   position i; 0 if it has none. */
+static int hairobb__ref_direction(const hairobb__builder *b, size_t i, float d[3])
 {
-    const float *cp = hairobb__control_points(b, id);
-    float d[3];
-    float len;
+    float scratch[16], len;
+    const float *cp = hairobb__ref_points(b, i, scratch);
     d[0] = cp[12] - cp[0]; d[1] = cp[13] - cp[1]; d[2] = cp[14] - cp[2];
     len = sqrtf(hairobb__dot3(d, d));
     if (!(len > 0.0f) || !(len < FLT_MAX)) return 0;
     d[0] /= len; d[1] /= len; d[2] /= len;
-    hairobb__frame_from_direction(d, frame);
     return 1;
 }
 
-/* Picks, among the main directions of evenly spaced segments of the range
-   (and the world axes when allow_identity), the rotation with the smallest
-   summed surface area of the sampled segments' boxes. Deterministic. */
-static void hairobb__choose_hair_space(const hairobb__builder *b, size_t begin, size_t end,
+/* Sum of the surface areas of up to HAIROBB__SAMPLE evenly spaced
+   references of the range in frame (NULL: world), stopping past `limit`. */
+/* The position of the k-th reference of a list of ranges. */
+static size_t hairobb__position_at(const hairobb__range *ranges, size_t k)
+{
+    while (k >= ranges->end - ranges->begin) { k -= ranges->end - ranges->begin; ++ranges; }
+    return ranges->begin + k;
+}
+
+/* Sum of the surface areas of up to HAIROBB__SAMPLE evenly spaced
+   references of the ranges (count references in all) in frame (NULL: world),
+   stopping past `limit`. */
+static float hairobb__sampled_area(const hairobb__builder *b, const hairobb__range *ranges, size_t count,
+                                   const float *frame, float limit)
+{
+    size_t step = count > HAIROBB__SAMPLE ? count / HAIROBB__SAMPLE : 1, k;
+    float area = 0.0f;
+    for (k = 0; k < count && area < limit; k += step) {
+        float lower[3], upper[3];
+        hairobb__prim_box(b, hairobb__position_at(ranges, k), frame, lower, upper);
+        area += hairobb__half_area(lower, upper);
+    }
+    return area;
+}
+
+/* Picks, among the main directions of evenly spaced references of the
+   ranges (and the world axes when allow_identity), the rotation with the
+   smallest summed surface area of the sampled references' boxes. Deterministic. */
+static void hairobb__choose_hair_space(const hairobb__builder *b, const hairobb__range *ranges, int range_count,
                                        int allow_identity, float best_frame[9])
 {
-    size_t count = end - begin, step = count > HAIROBB__SAMPLE ? count / HAIROBB__SAMPLE : 1;
-    unsigned c, candidates = b->candidates < count ? b->candidates : (unsigned)count;
+    size_t count = 0;
+    unsigned c, candidates;
     float best_area = FLT_MAX;
+    int i;
+    for (i = 0; i < range_count; ++i) count += ranges[i].end - ranges[i].begin;
+    candidates = b->candidates < count ? b->candidates : (unsigned)count;
     hairobb__identity_frame(best_frame);
-    for (c = 0; c < candidates + (allow_identity ? 1u : 0u); ++c) {
-        float frame[9], area = 0.0f;
-        size_t i;
-        if (c == candidates) {
-            hairobb__identity_frame(frame);
-        } else {
-            size_t pick = begin + (count * (2 * c + 1)) / (2 * candidates);
-            if (!hairobb__segment_frame(b, b->ids[pick], frame)) continue;
-        }
-        for (i = begin; i < end && area < best_area; i += step) {
-            float lower[3], upper[3];
-            hairobb__prim_box(b, b->ids[i], c == candidates ? NULL : frame, lower, upper);   /* NULL: cached world box */
-            area += hairobb__half_area(lower, upper);
-        }
+    if (allow_identity) best_area = hairobb__sampled_area(b, ranges, count, NULL, FLT_MAX);
+    for (c = 0; c < candidates; ++c) {
+        float frame[9], d[3], area;
+        size_t pick = hairobb__position_at(ranges, (count * (2 * c + 1)) / (2 * candidates));
+        if (!hairobb__ref_direction(b, pick, d)) continue;
+        hairobb__frame_from_direction(d, frame);
+        area = hairobb__sampled_area(b, ranges, count, frame, best_area);
         if (area < best_area) { best_area = area; memcpy(best_frame, frame, sizeof frame); }
     }
 }
 
 /* ------------------------------------------------------------------------ */
-/* Builder: binned SAH in world space and in hair space, filling W children */
+/* Builder: binned SAH (object and spatial splits in world and hair space,  */
+/* similar-orientation clusters), filling W children                        */
 /* ------------------------------------------------------------------------ */
+enum { HAIROBB__SPLIT_MEDIAN, HAIROBB__SPLIT_OBJECT, HAIROBB__SPLIT_SPATIAL, HAIROBB__SPLIT_CLUSTER };
+
 typedef struct hairobb__split {
     float cost;                 /* FLT_MAX: no split found */
+    int kind;                   /* HAIROBB__SPLIT_* */
+    unsigned heuristic;         /* HAIROBB__TRY_* bits of what won; 0 world object binning */
     int hair_space;             /* the split was made in frame, not world axes */
     float frame[9];
     int axis;
     float bin_origin, bin_scale;
-    int last_left_bin;          /* bins 0..last_left_bin go left; -1: split at the median */
+    int last_left_bin;          /* bins 0..last_left_bin go left */
+    float direction[2][3];      /* clusters: the two main directions */
     float area_left, area_right;
     float parent_area;          /* world box of the range being split */
 } hairobb__split;
 
-static int hairobb__bin_of(float centroid, float origin, float scale)
+static int hairobb__bin_of(float x, float origin, float scale)
 {
-    int bin = (int)((centroid - origin) * scale);
+    int bin = (int)((x - origin) * scale);
     return bin < 0 ? 0 : bin >= HAIROBB__BINS ? HAIROBB__BINS - 1 : bin;
 }
 
-/* Box of the segment at position i of ids: its world box, or (frame given)
+/* Box of the reference at position i: its world box, or (frame given)
    the box hairobb__bin_split computed in that frame. */
 static void hairobb__box_at(const hairobb__builder *b, const float *frame, size_t i, float lower[3], float upper[3])
 {
-    const float *box = frame ? b->frame_boxes + 6 * i : b->world_boxes + 6 * (size_t)b->ids[i];
+    const float *box = frame ? b->frame_boxes + 6 * i : b->world_boxes + 6 * i;
     memcpy(lower, box, 3 * sizeof(float));
     memcpy(upper, box + 3, 3 * sizeof(float));
 }
 
-/* Best SAH object split of ids[begin, end) binned by centroid along the axes
-   of frame (NULL = world axes). Costs are SAH costs times the parent's area;
-   box_cost is that of testing the two new child boxes. */
-static void hairobb__bin_split(const hairobb__builder *b, size_t begin, size_t end,
-                               const float *frame, float box_cost, hairobb__split *best)
+/* One sweep over binned boxes: counts[bin] enter from the left (entries) and
+   leave to the right (exits); for object bins both are the bin's count.
+   Keeps the cheapest plane in *best. */
+static void hairobb__sweep_bins(const float bin_lower[][3], const float bin_upper[][3], const size_t *entries,
+                                const size_t *exits, float box_cost, int kind, const float *frame, int axis,
+                                float origin, float scale, hairobb__split *best)
 {
-    float cmin[3], cmax[3];
+    float right_area[HAIROBB__BINS], lo[3], hi[3];
+    size_t right_count[HAIROBB__BINS], left_count = 0;
+    int bin;
+    hairobb__box_empty(lo, hi);
+    right_count[HAIROBB__BINS - 1] = 0;
+    for (bin = HAIROBB__BINS - 1; bin > 0; --bin) {
+        hairobb__box_grow(lo, hi, bin_lower[bin], bin_upper[bin]);
+        right_count[bin] = exits[bin] + (bin + 1 < HAIROBB__BINS ? right_count[bin + 1] : 0);
+        right_area[bin] = right_count[bin] ? hairobb__half_area(lo, hi) : 0.0f;
+    }
+    hairobb__box_empty(lo, hi);
+    for (bin = 0; bin < HAIROBB__BINS - 1; ++bin) {
+        float cost, left_area;
+        hairobb__box_grow(lo, hi, bin_lower[bin], bin_upper[bin]);
+        left_count += entries[bin];
+        if (left_count == 0 || right_count[bin + 1] == 0) continue;
+        left_area = hairobb__half_area(lo, hi);
+        cost = box_cost + HAIROBB__COST_SEGMENT * (left_area * (float)left_count + right_area[bin + 1] * (float)right_count[bin + 1]);
+        if (cost < best->cost) {
+            best->cost = cost;
+            best->kind = kind;
+            best->hair_space = frame != NULL;
+            best->heuristic = (frame ? HAIROBB__TRY_HAIR_SPACE : 0u) | (kind == HAIROBB__SPLIT_SPATIAL ? HAIROBB__TRY_SPATIAL : 0u);
+            if (frame) memcpy(best->frame, frame, sizeof best->frame);
+            best->axis = axis;
+            best->bin_origin = origin;
+            best->bin_scale = scale;
+            best->last_left_bin = bin;
+            best->area_left = left_area;
+            best->area_right = right_area[bin + 1];
+        }
+    }
+}
+
+/* Best SAH split of the range binned along the axes of frame (NULL = world
+   axes): by centroid (object split) and, with spatial_slack > 0, by
+   clipping references at the bin planes (spatial split) when at most
+   spatial_slack of them straddle the plane. Costs are SAH costs times the
+   parent's area; box_cost is that of testing the two new child boxes. */
+static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *r, const float *frame,
+                               float box_cost, size_t spatial_slack, hairobb__split *best)
+{
+    float cmin[3], cmax[3], bmin[3], bmax[3];
     size_t i;
     int axis;
     if (frame) {
-        for (i = begin; i < end; ++i)
-            hairobb__segment_box(hairobb__control_points(b, b->ids[i]), frame, NULL, b->frame_boxes + 6 * i, b->frame_boxes + 6 * i + 3);
+        for (i = r->begin; i < r->end; ++i) {
+            float scratch[16];
+            hairobb__segment_box(hairobb__ref_points(b, i, scratch), frame, NULL, b->frame_boxes + 6 * i, b->frame_boxes + 6 * i + 3);
+        }
     }
     hairobb__box_empty(cmin, cmax);
-    for (i = begin; i < end; ++i) {
+    hairobb__box_empty(bmin, bmax);
+    for (i = r->begin; i < r->end; ++i) {
         float lower[3], upper[3], c[3];
         int k;
         hairobb__box_at(b, frame, i, lower, upper);
         for (k = 0; k < 3; ++k) c[k] = 0.5f * (lower[k] + upper[k]);
         hairobb__box_grow(cmin, cmax, c, c);
+        hairobb__box_grow(bmin, bmax, lower, upper);
     }
     for (axis = 0; axis < 3; ++axis) {
         float bin_lower[HAIROBB__BINS][3], bin_upper[HAIROBB__BINS][3];
-        float right_area[HAIROBB__BINS];
-        size_t bin_count[HAIROBB__BINS], right_count[HAIROBB__BINS], left_count = 0;
-        float extent = cmax[axis] - cmin[axis], scale, lo[3], hi[3];
+        size_t bin_count[HAIROBB__BINS], exits[HAIROBB__BINS];
+        float extent = cmax[axis] - cmin[axis], scale;
         int bin;
-        if (!(extent > 0.0f)) continue;
-        scale = (float)HAIROBB__BINS * (1.0f - 1.0f / 1024.0f) / extent;
-        for (bin = 0; bin < HAIROBB__BINS; ++bin) {
-            hairobb__box_empty(bin_lower[bin], bin_upper[bin]);
-            bin_count[bin] = 0;
+        if (extent > 0.0f) {
+            scale = (float)HAIROBB__BINS * (1.0f - 1.0f / 1024.0f) / extent;
+            for (bin = 0; bin < HAIROBB__BINS; ++bin) {
+                hairobb__box_empty(bin_lower[bin], bin_upper[bin]);
+                bin_count[bin] = 0;
+            }
+            for (i = r->begin; i < r->end; ++i) {
+                float lower[3], upper[3];
+                hairobb__box_at(b, frame, i, lower, upper);
+                bin = hairobb__bin_of(0.5f * (lower[axis] + upper[axis]), cmin[axis], scale);
+                hairobb__box_grow(bin_lower[bin], bin_upper[bin], lower, upper);
+                bin_count[bin]++;
+            }
+            hairobb__sweep_bins((const float (*)[3])bin_lower, (const float (*)[3])bin_upper, bin_count, bin_count,
+                                box_cost, HAIROBB__SPLIT_OBJECT, frame, axis, cmin[axis], scale, best);
         }
-        for (i = begin; i < end; ++i) {
-            float lower[3], upper[3];
-            hairobb__box_at(b, frame, i, lower, upper);
-            bin = hairobb__bin_of(0.5f * (lower[axis] + upper[axis]), cmin[axis], scale);
-            hairobb__box_grow(bin_lower[bin], bin_upper[bin], lower, upper);
-            bin_count[bin]++;
-        }
-        /* right-to-left sweep: box and count of bins [bin, BINS) */
-        hairobb__box_empty(lo, hi);
-        for (bin = HAIROBB__BINS - 1; bin > 0; --bin) {
-            hairobb__box_grow(lo, hi, bin_lower[bin], bin_upper[bin]);
-            right_count[bin] = bin_count[bin] + (bin + 1 < HAIROBB__BINS ? right_count[bin + 1] : 0);
-            right_area[bin] = right_count[bin] ? hairobb__half_area(lo, hi) : 0.0f;
-        }
-        hairobb__box_empty(lo, hi);
-        for (bin = 0; bin < HAIROBB__BINS - 1; ++bin) {
-            float cost, left_area;
-            hairobb__box_grow(lo, hi, bin_lower[bin], bin_upper[bin]);
-            left_count += bin_count[bin];
-            if (left_count == 0 || right_count[bin + 1] == 0) continue;
-            left_area = hairobb__half_area(lo, hi);
-            cost = box_cost + HAIROBB__COST_SEGMENT * (left_area * (float)left_count + right_area[bin + 1] * (float)right_count[bin + 1]);
-            if (cost < best->cost) {
-                best->cost = cost;
-                best->hair_space = frame != NULL;
-                if (frame) memcpy(best->frame, frame, sizeof best->frame);
-                best->axis = axis;
-                best->bin_origin = cmin[axis];
-                best->bin_scale = scale;
-                best->last_left_bin = bin;
-                best->area_left = left_area;
-                best->area_right = right_area[bin + 1];
+        extent = bmax[axis] - bmin[axis];
+        if (spatial_slack > 0 && extent > 0.0f) {
+            /* each reference enters the bin of its lower end and leaves by that of
+               its upper end; in between, its box clipped to each bin's slab is
+               what it adds there (an upper bound of its clipped curve) */
+            hairobb__split before = *best;
+            scale = (float)HAIROBB__BINS * (1.0f - 1.0f / 1024.0f) / extent;
+            for (bin = 0; bin < HAIROBB__BINS; ++bin) {
+                hairobb__box_empty(bin_lower[bin], bin_upper[bin]);
+                bin_count[bin] = exits[bin] = 0;
+            }
+            for (i = r->begin; i < r->end; ++i) {
+                float lower[3], upper[3];
+                int first, last;
+                hairobb__box_at(b, frame, i, lower, upper);
+                first = hairobb__bin_of(lower[axis], bmin[axis], scale);
+                last = hairobb__bin_of(upper[axis], bmin[axis], scale);
+                bin_count[first]++;
+                exits[last]++;
+                for (bin = first; bin <= last; ++bin) {
+                    float lo[3], hi[3];
+                    memcpy(lo, lower, sizeof lo);
+                    memcpy(hi, upper, sizeof hi);
+                    if (bin > first) lo[axis] = bmin[axis] + (float)bin / scale;
+                    if (bin < last) hi[axis] = bmin[axis] + (float)(bin + 1) / scale;
+                    hairobb__box_grow(bin_lower[bin], bin_upper[bin], lo, hi);
+                }
+            }
+            hairobb__sweep_bins((const float (*)[3])bin_lower, (const float (*)[3])bin_upper, bin_count, exits,
+                                box_cost, HAIROBB__SPLIT_SPATIAL, frame, axis, bmin[axis], scale, best);
+            if (best->cost < before.cost) {
+                /* the budget: count the references straddling the chosen plane */
+                size_t straddling = 0;
+                for (i = r->begin; i < r->end; ++i) {
+                    float lower[3], upper[3];
+                    hairobb__box_at(b, frame, i, lower, upper);
+                    if (hairobb__bin_of(lower[axis], bmin[axis], scale) <= best->last_left_bin &&
+                        hairobb__bin_of(upper[axis], bmin[axis], scale) > best->last_left_bin) ++straddling;
+                }
+                if (straddling > spatial_slack) *best = before;   /* over budget: forget it */
             }
         }
+    }
+}
+
+/* Which of two main directions a reference is closer to (0 or 1). */
+static int hairobb__cluster_of(const hairobb__builder *b, size_t i, const float direction[2][3])
+{
+    float d[3];
+    if (!hairobb__ref_direction(b, i, d)) return 0;
+    return fabsf(hairobb__dot3(d, direction[1])) > fabsf(hairobb__dot3(d, direction[0]));
+}
+
+/* Similar-orientation clustering: the main direction of the middle reference
+   (A) and of the sampled reference most misaligned with it (B); each
+   reference joins the one its own direction is closer to, and each cluster
+   is bounded in its own hair space. */
+static void hairobb__cluster_split(const hairobb__builder *b, const hairobb__range *r, float box_cost, hairobb__split *best)
+{
+    size_t count = r->end - r->begin, step = count > HAIROBB__SAMPLE ? count / HAIROBB__SAMPLE : 1, i, n[2] = {0, 0};
+    float direction[2][3], frame[2][9], lower[2][3], upper[2][3], best_dot = 0.9f, cost;
+    int found = 0, c;
+    if (!hairobb__ref_direction(b, r->begin + count / 2, direction[0])) return;
+    for (i = r->begin; i < r->end; i += step) {
+        float d[3], dot;
+        if (!hairobb__ref_direction(b, i, d)) continue;
+        dot = fabsf(hairobb__dot3(d, direction[0]));
+        if (dot < best_dot) { best_dot = dot; memcpy(direction[1], d, sizeof d); found = 1; }
+    }
+    if (!found) return;     /* all within ~25 degrees: hair-space binning covers it */
+    for (c = 0; c < 2; ++c) {
+        hairobb__frame_from_direction(direction[c], frame[c]);
+        hairobb__box_empty(lower[c], upper[c]);
+    }
+    for (i = r->begin; i < r->end; ++i) {
+        float lo[3], hi[3];
+        c = hairobb__cluster_of(b, i, (const float (*)[3])direction);
+        hairobb__prim_box(b, i, frame[c], lo, hi);
+        hairobb__box_grow(lower[c], upper[c], lo, hi);
+        n[c]++;
+    }
+    if (n[0] == 0 || n[1] == 0) return;
+    cost = box_cost + HAIROBB__COST_SEGMENT * (hairobb__half_area(lower[0], upper[0]) * (float)n[0] +
+                                               hairobb__half_area(lower[1], upper[1]) * (float)n[1]);
+    if (cost < best->cost) {
+        best->cost = cost;
+        best->kind = HAIROBB__SPLIT_CLUSTER;
+        best->heuristic = HAIROBB__TRY_CLUSTER;
+        best->hair_space = 1;
+        memcpy(best->direction, direction, sizeof direction);
+        best->area_left = hairobb__half_area(lower[0], upper[0]);
+        best->area_right = hairobb__half_area(lower[1], upper[1]);
     }
 }
 
@@ -791,97 +1080,236 @@ static void hairobb__range_box(const hairobb__builder *b, size_t begin, size_t e
     hairobb__box_empty(lower, upper);
     for (i = begin; i < end; ++i) {
         float lo[3], hi[3];
-        hairobb__prim_box(b, b->ids[i], frame, lo, hi);
+        hairobb__prim_box(b, i, frame, lo, hi);
         hairobb__box_grow(lower, upper, lo, hi);
     }
 }
 
-/* The padded box of ids[begin, end) in frame around centre: what a node stores. */
-static void hairobb__node_box(const hairobb__builder *b, size_t begin, size_t end, const float frame[9],
-                              const float centre[3], float lower[3], float upper[3])
+/* The padded box of the range in frame around centre: what a node stores. */
+static void hairobb__node_box(const hairobb__builder *b, const hairobb__range *r, const float frame[9],
+                              const float *centre, float lower[3], float upper[3])
 {
     size_t i;
     hairobb__box_empty(lower, upper);
-    for (i = begin; i < end; ++i) {
-        float lo[3], hi[3];
-        hairobb__segment_box(hairobb__control_points(b, b->ids[i]), frame, centre, lo, hi);
+    for (i = r->begin; i < r->end; ++i) {
+        float lo[3], hi[3], scratch[16];
+        hairobb__segment_box(hairobb__ref_points(b, i, scratch), frame, centre, lo, hi);
         hairobb__box_grow(lower, upper, lo, hi);
     }
     hairobb__pad_box(lower, upper);
 }
 
 /* A float point near the middle of the range's world box. */
-static void hairobb__range_centre(const hairobb__builder *b, size_t begin, size_t end, float centre[3])
+static void hairobb__range_centre(const hairobb__builder *b, const hairobb__range *ranges, int range_count, float centre[3])
 {
-    float lower[3], upper[3];
-    int k;
-    hairobb__range_box(b, begin, end, NULL, lower, upper);
+    float lower[3], upper[3], lo[3], hi[3];
+    int k, i;
+    hairobb__box_empty(lower, upper);
+    for (i = 0; i < range_count; ++i) {
+        hairobb__range_box(b, ranges[i].begin, ranges[i].end, NULL, lo, hi);
+        hairobb__box_grow(lower, upper, lo, hi);
+    }
     for (k = 0; k < 3; ++k) centre[k] = 0.5f * lower[k] + 0.5f * upper[k];
 }
 
-/* The cheapest split the policy allows; a median split when binning finds
-   none (all centroids equal) or below the SAH depth. */
-static void hairobb__find_split(const hairobb__builder *b, size_t begin, size_t end, unsigned depth,
-                                hairobb__split *best)
+/* The cheapest split the policy and the subtree's tries allow; a median split
+   when none is found (all centroids equal) or below the SAH depth. */
+static void hairobb__find_split(const hairobb__builder *b, const hairobb__range *r, unsigned depth,
+                                unsigned tries, hairobb__split *best)
 {
     float lower[3], upper[3], area;
-    hairobb__range_box(b, begin, end, NULL, lower, upper);
+    size_t slack = (tries & HAIROBB__TRY_SPATIAL) ? r->cap - r->end : 0;
+    hairobb__range_box(b, r->begin, r->end, NULL, lower, upper);
     area = hairobb__half_area(lower, upper);
     best->cost = FLT_MAX;
+    best->kind = HAIROBB__SPLIT_MEDIAN;
+    best->heuristic = 0;
     best->hair_space = 0;
-    best->last_left_bin = -1;
     best->parent_area = area;
     if (depth < HAIROBB__SAH_DEPTH) {
         if (b->policy != HAIROBB_NODES_OBB_ONLY)
-            hairobb__bin_split(b, begin, end, NULL, 2.0f * HAIROBB__COST_AABB * area, best);
-        if (b->policy != HAIROBB_NODES_AABB_ONLY) {
+            hairobb__bin_split(b, r, NULL, 2.0f * HAIROBB__COST_AABB * area, slack, best);
+        if (b->policy != HAIROBB_NODES_AABB_ONLY && (tries & HAIROBB__TRY_HAIR_SPACE)) {
             float frame[9];
-            hairobb__choose_hair_space(b, begin, end, 0, frame);
-            hairobb__bin_split(b, begin, end, frame, 2.0f * HAIROBB__COST_OBB * area, best);
+            hairobb__choose_hair_space(b, r, 1, 0, frame);
+            hairobb__bin_split(b, r, frame, 2.0f * HAIROBB__COST_OBB * area, slack, best);
         }
+        if (b->policy != HAIROBB_NODES_AABB_ONLY && (tries & HAIROBB__TRY_CLUSTER))
+            hairobb__cluster_split(b, r, 2.0f * HAIROBB__COST_OBB * area, best);
     }
-    if (best->cost == FLT_MAX) {
-        size_t half = (end - begin) / 2;
-        hairobb__range_box(b, begin, begin + half, NULL, lower, upper);
+    if (best->kind == HAIROBB__SPLIT_MEDIAN) {
+        size_t half = (r->end - r->begin) / 2;
+        best->cost = FLT_MAX;
+        hairobb__range_box(b, r->begin, r->begin + half, NULL, lower, upper);
         best->area_left = hairobb__half_area(lower, upper);
-        hairobb__range_box(b, begin + half, end, NULL, lower, upper);
+        hairobb__range_box(b, r->begin + half, r->end, NULL, lower, upper);
         best->area_right = hairobb__half_area(lower, upper);
     }
 }
 
-/* Reorders ids[begin, end) so the split's left side comes first; returns the
-   first right index. */
-static size_t hairobb__partition(hairobb__builder *b, size_t begin, size_t end, const hairobb__split *split)
+/* "Skip what a scene doesn't need": spatial splits or clustering that won
+   none of HAIROBB__STRIKES splits in a row on the way down are not tried in
+   the subtree below. Hair-space binning is always tried: on combed hair it
+   loses near the root, where hair is sorted by place, and wins most splits
+   below (80% of them), so no early verdict on it holds. */
+static void hairobb__update_tries(hairobb__tries *t, const hairobb__split *split)
 {
-    size_t left = begin, right = end;
-    if (split->last_left_bin < 0) return begin + (end - begin) / 2;
-    while (left < right) {
-        float lower[3], upper[3];
-        hairobb__prim_box(b, b->ids[left], split->hair_space ? split->frame : NULL, lower, upper);
-        if (hairobb__bin_of(0.5f * (lower[split->axis] + upper[split->axis]), split->bin_origin, split->bin_scale)
-            <= split->last_left_bin) {
-            ++left;
-        } else {
-            uint32_t t = b->ids[left];
-            b->ids[left] = b->ids[--right];
-            b->ids[right] = t;
-        }
+    int h;
+    for (h = 1; h < 3; ++h) {
+        unsigned bit = 1u << h;
+        if (!(t->enabled & bit)) continue;
+        if (split->cost == FLT_MAX || (split->heuristic & bit)) t->losses[h] = 0;
+        else if (++t->losses[h] >= HAIROBB__STRIKES) t->enabled &= ~bit;
     }
-    HAIROBB_ASSERT(left > begin && left < end);
-    return left;
+}
+
+static void hairobb__copy_position(hairobb__builder *b, size_t to, size_t from)
+{
+    b->ids[to] = b->ids[from];
+    memcpy(b->ranges + 2 * to, b->ranges + 2 * from, 2 * sizeof(float));
+    memcpy(b->world_boxes + 6 * to, b->world_boxes + 6 * from, 6 * sizeof(float));
+}
+
+static void hairobb__swap_positions(hairobb__builder *b, size_t i, size_t j)
+{
+    uint32_t id = b->ids[i];
+    float range[2], box[6];
+    memcpy(range, b->ranges + 2 * i, sizeof range);
+    memcpy(box, b->world_boxes + 6 * i, sizeof box);
+    hairobb__copy_position(b, i, j);
+    b->ids[j] = id;
+    memcpy(b->ranges + 2 * j, range, sizeof range);
+    memcpy(b->world_boxes + 6 * j, box, sizeof box);
+}
+
+static void hairobb__set_range(hairobb__builder *b, size_t i, float u0, float u1)
+{
+    float scratch[16], identity[9];
+    b->ranges[2 * i] = u0;
+    b->ranges[2 * i + 1] = u1;
+    hairobb__identity_frame(identity);
+    hairobb__segment_box(hairobb__ref_points(b, i, scratch), identity, NULL, b->world_boxes + 6 * i, b->world_boxes + 6 * i + 3);
+}
+
+/* Side of a reference for split: 0 left, 1 right, 2 straddling a spatial plane. */
+static int hairobb__side(const hairobb__builder *b, size_t i, const hairobb__split *split)
+{
+    float lower[3], upper[3];
+    if (split->kind == HAIROBB__SPLIT_CLUSTER) return hairobb__cluster_of(b, i, split->direction);
+    hairobb__prim_box(b, i, split->hair_space ? split->frame : NULL, lower, upper);
+    if (split->kind == HAIROBB__SPLIT_SPATIAL) {
+        int first = hairobb__bin_of(lower[split->axis], split->bin_origin, split->bin_scale);
+        int last = hairobb__bin_of(upper[split->axis], split->bin_origin, split->bin_scale);
+        return last <= split->last_left_bin ? 0 : first > split->last_left_bin ? 1 : 2;
+    }
+    return hairobb__bin_of(0.5f * (lower[split->axis] + upper[split->axis]), split->bin_origin, split->bin_scale)
+           > split->last_left_bin;
+}
+
+/* Clips the straddling reference at position i at the split plane: i keeps
+   the part on one side, position `extra` gets the other; the side i's part
+   lies on is returned. A reference whose centre line does not cross the
+   plane between its ends is not clipped (returns 0, extra unused: -1). */
+static int hairobb__clip(hairobb__builder *b, size_t i, size_t extra, const hairobb__split *split)
+{
+    float scratch[16], frame_row[3] = {0.0f, 0.0f, 0.0f}, plane, u0 = b->ranges[2 * i], u1 = b->ranges[2 * i + 1];
+    float lo = u0, hi = u1, c0, c1, uc;
+    const float *cp = b->vertices + 4 * (size_t)b->indices[b->ids[i]];
+    int iteration, k;
+    (void)scratch;
+    if (split->hair_space) memcpy(frame_row, split->frame + 3 * split->axis, sizeof frame_row);
+    else frame_row[split->axis] = 1.0f;
+    plane = split->bin_origin + (float)(split->last_left_bin + 1) / split->bin_scale;
+    /* the centre line's coordinate along the plane's normal, in the whole segment's u */
+#define HAIROBB__COORD(u) (frame_row[0] * hairobb__bezier4(cp, 0, u) + frame_row[1] * hairobb__bezier4(cp, 1, u) + \
+                           frame_row[2] * hairobb__bezier4(cp, 2, u) - plane)
+    c0 = HAIROBB__COORD(u0);
+    c1 = HAIROBB__COORD(u1);
+    if (!((c0 < 0.0f && c1 > 0.0f) || (c0 > 0.0f && c1 < 0.0f))) return -1;
+    for (iteration = 0; iteration < 24; ++iteration) {
+        float mid = 0.5f * (lo + hi), cm = HAIROBB__COORD(mid);
+        if (mid <= lo || mid >= hi) break;
+        if ((cm < 0.0f) == (c0 < 0.0f)) lo = mid; else hi = mid;
+    }
+#undef HAIROBB__COORD
+    uc = 0.5f * (lo + hi);
+    if (!(uc > u0 && uc < u1)) return -1;
+    b->ids[extra] = b->ids[i];
+    hairobb__set_range(b, extra, uc, u1);
+    hairobb__set_range(b, i, u0, uc);
+    k = c0 < 0.0f ? 0 : 1;      /* i keeps [u0, uc], which starts on side k */
+    return k;
+}
+
+/* Moves positions [from, end) to start at `to` (to >= from). */
+static void hairobb__shift_positions(hairobb__builder *b, size_t from, size_t end, size_t to)
+{
+    size_t n = end - from;
+    if (to == from || n == 0) return;
+    memmove(b->ids + to, b->ids + from, n * sizeof *b->ids);
+    memmove(b->ranges + 2 * to, b->ranges + 2 * from, 2 * n * sizeof *b->ranges);
+    memmove(b->world_boxes + 6 * to, b->world_boxes + 6 * from, 6 * n * sizeof *b->world_boxes);
+}
+
+/* Splits range r into *left and *right: left's references first; spatial
+   splits clip the straddling ones, appending the extra parts in r's slack.
+   The remaining slack is shared in proportion to the two sides' sizes. */
+static void hairobb__partition(hairobb__builder *b, const hairobb__range *r, const hairobb__split *split,
+                               hairobb__range *left, hairobb__range *right)
+{
+    size_t lo = r->begin, mid = r->begin, hi = r->end, end = r->end, i, left_count, right_count, slack, share;
+    if (split->kind == HAIROBB__SPLIT_MEDIAN) {
+        mid = r->begin + (r->end - r->begin) / 2;
+        lo = mid;
+    } else {
+        /* three-way: [begin, lo) left, [lo, mid) straddling, [hi, end) right */
+        while (mid < hi) {
+            int side = hairobb__side(b, mid, split);
+            if (side == 0) hairobb__swap_positions(b, lo++, mid++);
+            else if (side == 2) mid++;
+            else hairobb__swap_positions(b, mid, --hi);
+        }
+        /* clip the straddling references: the left part stays, the right part
+           is appended after the right side */
+        for (i = lo; i < mid; ++i) {
+            int side;
+            HAIROBB_ASSERT(end < r->cap);
+            side = hairobb__clip(b, i, end, split);
+            if (side < 0) continue;                 /* kept whole, on the left */
+            if (side == 1) hairobb__swap_positions(b, i, end);
+            ++end;
+        }
+        lo = mid;
+    }
+    left_count = lo - r->begin;
+    right_count = end - lo;
+    if (left_count == 0 || right_count == 0) {
+        /* the plane cut nothing apart after all: fall back to the median */
+        hairobb__split median = *split;
+        hairobb__range whole = *r;
+        median.kind = HAIROBB__SPLIT_MEDIAN;
+        whole.end = end;
+        hairobb__partition(b, &whole, &median, left, right);
+        return;
+    }
+    slack = r->cap - end;
+    share = (size_t)((double)slack * (double)left_count / (double)(left_count + right_count));
+    hairobb__shift_positions(b, lo, end, lo + share);
+    left->begin = r->begin; left->end = lo; left->cap = lo + share;
+    right->begin = lo + share; right->end = end + share; right->cap = r->cap;
 }
 
 /* Node memory grows by doubling; offsets, not pointers, survive a move. */
 static size_t hairobb__alloc_node(hairobb__builder *b, size_t bytes)
 {
     size_t offset = b->node_bytes;
-    if (b->out_of_memory) return 0;
+    if (b->error != HAIROBB_OK) return 0;
     if (offset + bytes > b->node_capacity) {
         size_t capacity = b->node_capacity ? 2 * b->node_capacity : 4096;
         unsigned char *allocation, *aligned;
         while (capacity < offset + bytes) capacity *= 2;
         allocation = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(capacity + 64, b->user));
-        if (!allocation) { b->out_of_memory = 1; return 0; }
+        if (!allocation) { b->error = HAIROBB_ERROR_OUT_OF_MEMORY; return 0; }
         aligned = allocation + ((64 - ((uintptr_t)allocation & 63)) & 63);
         if (b->node_bytes) memcpy(aligned, b->nodes, b->node_bytes);
         if (b->node_allocation) HAIROBB_FREE(b->node_allocation, b->user);
@@ -894,17 +1322,31 @@ static size_t hairobb__alloc_node(hairobb__builder *b, size_t bytes)
 }
 
 typedef struct hairobb__child {
-    size_t begin, end;
+    hairobb__range range;
     float area;
     int final_leaf;             /* SAH chose a leaf for it */
 } hairobb__child;
 
-static uint64_t hairobb__make_leaf(hairobb__builder *b, size_t begin, size_t end, unsigned depth)
+/* Reports progress: a leaf finishes the positions [begin, cap) of its range. */
+static void hairobb__finish_positions(hairobb__builder *b, size_t count)
 {
+    b->positions_done += count;
+    if (b->progress && b->positions_done >= b->next_report && b->error == HAIROBB_OK) {
+        b->next_report = b->positions_done + b->capacity / 128 + 1;
+        if (b->progress(b->progress_user, (float)((double)b->positions_done / (double)b->capacity)))
+            b->error = HAIROBB_ERROR_CANCELLED;
+    }
+}
+
+static uint64_t hairobb__make_leaf(hairobb__builder *b, const hairobb__range *r, unsigned depth)
+{
+    size_t start = b->leaf_count, i;
+    for (i = r->begin; i < r->end; ++i) b->leaf_prims[b->leaf_count++] = b->ids[i];
     b->stats.leaves++;
-    b->stats.leaf_references += end - begin;
+    b->stats.leaf_references += r->end - r->begin;
     if (depth > b->stats.max_depth) b->stats.max_depth = depth;
-    return ((uint64_t)begin << 8) | ((uint64_t)(end - begin) << 4) | HAIROBB__REF_LEAF;
+    hairobb__finish_positions(b, r->cap - r->begin);
+    return ((uint64_t)start << 8) | ((uint64_t)(r->end - r->begin) << 4) | HAIROBB__REF_LEAF;
 }
 
 /* Writes the affine map of box [lower, upper] in frame onto the unit cube
@@ -922,76 +1364,110 @@ static void hairobb__store_obb(hairobb__obb_node *node, int lane, const float fr
     }
 }
 
-static uint64_t hairobb__build_range(hairobb__builder *b, size_t begin, size_t end, unsigned depth);
+/* The frame a compressed node's bytes decode to; traversal decodes the same way. */
+static void hairobb__decode_rotation(const signed char q[9], float frame[9])
+{
+    int k;
+    for (k = 0; k < 9; ++k) frame[k] = (float)q[k] * (1.0f / 127.0f);
+}
+
+/* Child boxes (in the node's frame, around its centre) to bytes: a step per
+   axis so the largest coordinate fits 127 steps, then each plane rounded
+   outward and checked against the product the traversal computes. */
+static void hairobb__store_compressed(hairobb__compressed_node *node, int count,
+                                      const float lower[][3], const float upper[][3])
+{
+    int i, k;
+    for (k = 0; k < 3; ++k) {
+        float largest = 0.0f, step;
+        for (i = 0; i < count; ++i) largest = hairobb__maxf(largest, hairobb__maxf(fabsf(lower[i][k]), fabsf(upper[i][k])));
+        step = hairobb__maxf(largest * (1.0f / 127.0f) * (1.0f + 1.0f / 65536.0f), 1e-30f);
+        while (127.0f * step < largest) step = nextafterf(step, FLT_MAX);
+        node->step[k] = step;
+        for (i = 0; i < HAIROBB__W; ++i) {
+            int lo = 127, hi = -128;      /* empty lane: lower above upper */
+            if (i < count) {
+                lo = (int)floorf(lower[i][k] / step);
+                hi = (int)ceilf(upper[i][k] / step);
+                lo = lo < -127 ? -127 : lo;
+                hi = hi > 127 ? 127 : hi;
+                while (lo > -127 && (float)lo * step > lower[i][k]) --lo;
+                while (hi < 127 && (float)hi * step < upper[i][k]) ++hi;
+            }
+            node->lower[k][i] = (signed char)lo;
+            node->upper[k][i] = (signed char)hi;
+        }
+    }
+}
+
+static uint64_t hairobb__build_range(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries);
 
 /* SAH cost of a leaf, on the scale of hairobb__bin_split's costs */
 static float hairobb__leaf_cost(size_t count, float area) { return HAIROBB__COST_SEGMENT * (float)count * area; }
 
-/* Builds a node over ids[begin, end): split the child with the largest
-   area until there are W; the node is OBB where a hair-space split won. */
-static uint64_t hairobb__build_node(hairobb__builder *b, size_t begin, size_t end, unsigned depth,
-                                    const hairobb__split *first_split)
+/* Builds a node over range r: split the child with the largest area until
+   there are W; the node is OBB where a hair-space split or a cluster won. */
+static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r, unsigned depth,
+                                    const hairobb__split *first_split, hairobb__tries tries)
 {
     hairobb__child children[HAIROBB__W];
+    hairobb__range ranges[HAIROBB__W];
     int count = 1, use_obb = b->policy == HAIROBB_NODES_OBB_ONLY, i;
     unsigned node_type;
-    size_t offset;
-    uint64_t refs[HAIROBB__W];
+    size_t offset, node_size, child_offset;
     hairobb__split split = *first_split;
-    children[0].begin = begin; children[0].end = end; children[0].area = FLT_MAX; children[0].final_leaf = 0;
+    children[0].range = *r; children[0].area = FLT_MAX; children[0].final_leaf = 0;
     for (;;) {
         int pick = -1;
-        size_t middle;
+        hairobb__range whole;
         for (i = 0; i < count; ++i) {
-            if (children[i].final_leaf || children[i].end - children[i].begin < 2) continue;
+            if (children[i].final_leaf || children[i].range.end - children[i].range.begin < 2) continue;
             if (pick < 0 || children[i].area > children[pick].area) pick = i;
         }
         if (pick < 0 || count == HAIROBB__W) break;
         if (count > 1) {
-            size_t n = children[pick].end - children[pick].begin;
-            hairobb__find_split(b, children[pick].begin, children[pick].end, depth + 1, &split);
+            size_t n = children[pick].range.end - children[pick].range.begin;
+            hairobb__find_split(b, &children[pick].range, depth + 1, tries.enabled, &split);
+            hairobb__update_tries(&tries, &split);
             if (n <= b->max_leaf && hairobb__leaf_cost(n, split.parent_area) <= split.cost) {
                 children[pick].final_leaf = 1;
                 continue;
             }
         }
-        middle = hairobb__partition(b, children[pick].begin, children[pick].end, &split);
+        whole = children[pick].range;
+        hairobb__partition(b, &whole, &split, &children[pick].range, &children[count].range);
         if (split.hair_space) use_obb = 1;
-        children[count].begin = middle;
-        children[count].end = children[pick].end;
         children[count].area = split.area_right;
         children[count].final_leaf = 0;
-        children[pick].end = middle;
         children[pick].area = split.area_left;
         ++count;
     }
     if (b->policy == HAIROBB_NODES_AABB_ONLY) use_obb = 0;
 
-    if (use_obb && b->obb_layout == HAIROBB_OBB_PER_CHILD) node_type = HAIROBB__REF_OBB;
+    if (b->obb_layout == HAIROBB_OBB_COMPRESSED) node_type = use_obb ? HAIROBB__REF_QOBB : HAIROBB__REF_QAABB;
+    else if (use_obb && b->obb_layout == HAIROBB_OBB_PER_CHILD) node_type = HAIROBB__REF_OBB;
     else if (use_obb) node_type = HAIROBB__REF_ROTATED;
     else node_type = HAIROBB__REF_AABB;
-    offset = hairobb__alloc_node(b, node_type == HAIROBB__REF_OBB ? sizeof(hairobb__obb_node)
-                                    : node_type == HAIROBB__REF_ROTATED ? sizeof(hairobb__rotated_node)
-                                    : sizeof(hairobb__aabb_node));
+    node_size = node_type == HAIROBB__REF_OBB ? sizeof(hairobb__obb_node)
+              : node_type == HAIROBB__REF_ROTATED ? sizeof(hairobb__rotated_node)
+              : node_type == HAIROBB__REF_AABB ? sizeof(hairobb__aabb_node) : sizeof(hairobb__compressed_node);
+    /* every layout ends with child[W] */
+    child_offset = node_size - HAIROBB__W * sizeof(uint64_t);
+    offset = hairobb__alloc_node(b, node_size);
+    if (b->error != HAIROBB_OK) return HAIROBB__REF_EMPTY;
     if (use_obb) b->stats.obb_nodes++; else b->stats.aabb_nodes++;
-    for (i = 0; i < count; ++i) {
-        size_t n = children[i].end - children[i].begin;
-        if (children[i].final_leaf || n == 1 || (count == HAIROBB__W && n <= HAIROBB__FULL_NODE_LEAF && n <= b->max_leaf))
-            refs[i] = hairobb__make_leaf(b, children[i].begin, children[i].end, depth + 1);
-        else
-            refs[i] = hairobb__build_range(b, children[i].begin, children[i].end, depth + 1);
-    }
-    if (b->out_of_memory) return HAIROBB__REF_EMPTY;
+    /* boxes first: building the children moves references within their ranges */
+    for (i = 0; i < count; ++i) ranges[i] = children[i].range;
 
     if (node_type == HAIROBB__REF_OBB) {
         hairobb__obb_node *node = HAIROBB__CAST(hairobb__obb_node *, (void *)(b->nodes + offset));
-        hairobb__range_centre(b, begin, end, node->centre);
+        hairobb__range_centre(b, ranges, count, node->centre);
         node->centre[3] = 0.0f;
         for (i = 0; i < HAIROBB__W; ++i) {
             float frame[9], lower[3], upper[3];
             if (i < count) {
-                hairobb__choose_hair_space(b, children[i].begin, children[i].end, 1, frame);
-                hairobb__node_box(b, children[i].begin, children[i].end, frame, node->centre, lower, upper);
+                hairobb__choose_hair_space(b, &ranges[i], 1, 1, frame);
+                hairobb__node_box(b, &ranges[i], frame, node->centre, lower, upper);
             } else {
                 /* an empty child maps everything to (2,2,2): never inside the unit cube */
                 memset(frame, 0, sizeof frame);
@@ -999,8 +1475,22 @@ static uint64_t hairobb__build_node(hairobb__builder *b, size_t begin, size_t en
                 upper[0] = upper[1] = upper[2] = -1.0f;
             }
             hairobb__store_obb(node, i, frame, lower, upper);
-            node->child[i] = i < count ? refs[i] : HAIROBB__REF_EMPTY;
+            node->child[i] = HAIROBB__REF_EMPTY;
         }
+    } else if (node_type == HAIROBB__REF_QAABB || node_type == HAIROBB__REF_QOBB) {
+        hairobb__compressed_node *node = HAIROBB__CAST(hairobb__compressed_node *, (void *)(b->nodes + offset));
+        float frame[9], lower[HAIROBB__W][3], upper[HAIROBB__W][3];
+        memset(node, 0, sizeof *node);
+        hairobb__identity_frame(frame);
+        if (node_type == HAIROBB__REF_QOBB) {
+            hairobb__choose_hair_space(b, ranges, count, 1, frame);
+            for (i = 0; i < 9; ++i) node->rotation[i] = (signed char)lrintf(frame[i] * 127.0f);
+            hairobb__decode_rotation(node->rotation, frame);
+        }
+        hairobb__range_centre(b, ranges, count, node->centre);
+        for (i = 0; i < count; ++i) hairobb__node_box(b, &ranges[i], frame, node->centre, lower[i], upper[i]);
+        hairobb__store_compressed(node, count, (const float (*)[3])lower, (const float (*)[3])upper);
+        for (i = 0; i < HAIROBB__W; ++i) node->child[i] = HAIROBB__REF_EMPTY;
     } else {
         /* AABB and rotated nodes: all boxes in one frame (world axes, no centre, for AABB) */
         float frame[9], (*lower)[HAIROBB__W], (*upper)[HAIROBB__W];
@@ -1008,9 +1498,9 @@ static uint64_t hairobb__build_node(hairobb__builder *b, size_t begin, size_t en
         uint64_t *child;
         if (node_type == HAIROBB__REF_ROTATED) {
             hairobb__rotated_node *node = HAIROBB__CAST(hairobb__rotated_node *, (void *)(b->nodes + offset));
-            hairobb__choose_hair_space(b, begin, end, 1, frame);
+            hairobb__choose_hair_space(b, ranges, count, 1, frame);
             memcpy(node->rotation, frame, sizeof frame);
-            hairobb__range_centre(b, begin, end, node->centre);
+            hairobb__range_centre(b, ranges, count, node->centre);
             centre = node->centre;
             lower = node->lower; upper = node->upper; child = node->child;
         } else {
@@ -1022,24 +1512,37 @@ static uint64_t hairobb__build_node(hairobb__builder *b, size_t begin, size_t en
             float lo[3], hi[3];
             int k;
             if (i < count) {
-                hairobb__node_box(b, children[i].begin, children[i].end, frame, centre, lo, hi);
+                hairobb__node_box(b, &ranges[i], frame, centre, lo, hi);
             } else { for (k = 0; k < 3; ++k) { lo[k] = INFINITY; hi[k] = -INFINITY; } }
             for (k = 0; k < 3; ++k) { lower[k][i] = lo[k]; upper[k][i] = hi[k]; }
-            child[i] = i < count ? refs[i] : HAIROBB__REF_EMPTY;
+            child[i] = HAIROBB__REF_EMPTY;
         }
+    }
+    for (i = 0; i < count; ++i) {
+        const hairobb__range *c = &children[i].range;
+        size_t n = c->end - c->begin;
+        uint64_t ref;
+        if (children[i].final_leaf || n == 1 || (count == HAIROBB__W && n <= HAIROBB__FULL_NODE_LEAF && n <= b->max_leaf))
+            ref = hairobb__make_leaf(b, c, depth + 1);
+        else
+            ref = hairobb__build_range(b, c, depth + 1, tries);
+        if (b->error != HAIROBB_OK) return HAIROBB__REF_EMPTY;
+        /* node memory may have moved: child[] at its offset in the node */
+        memcpy(b->nodes + offset + child_offset + i * sizeof(uint64_t), &ref, sizeof ref);
     }
     return (uint64_t)offset | node_type;
 }
 
-static uint64_t hairobb__build_range(hairobb__builder *b, size_t begin, size_t end, unsigned depth)
+static uint64_t hairobb__build_range(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries)
 {
     hairobb__split split;
-    size_t n = end - begin;
-    if (n == 1) return hairobb__make_leaf(b, begin, end, depth);
-    hairobb__find_split(b, begin, end, depth, &split);
+    size_t n = r->end - r->begin;
+    if (n == 1) return hairobb__make_leaf(b, r, depth);
+    hairobb__find_split(b, r, depth, tries.enabled, &split);
+    hairobb__update_tries(&tries, &split);
     if (n <= b->max_leaf && hairobb__leaf_cost(n, split.parent_area) <= split.cost)
-        return hairobb__make_leaf(b, begin, end, depth);
-    return hairobb__build_node(b, begin, end, depth, &split);
+        return hairobb__make_leaf(b, r, depth);
+    return hairobb__build_node(b, r, depth, &split, tries);
 }
 
 static void hairobb__setup_pieces(hairobb_bvh *bvh, int pieces)
@@ -1065,16 +1568,30 @@ static void hairobb__setup_pieces(hairobb_bvh *bvh, int pieces)
     }
 }
 
+/* A copy of `bytes` bytes at `alignment` in an allocation of just that size:
+   what stays after the build. */
+static void *hairobb__shrink(void *old, size_t bytes, size_t alignment, void **allocation, void *user)
+{
+    unsigned char *raw = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(bytes + alignment, user)), *aligned;
+    if (!raw) return NULL;
+    aligned = raw + ((alignment - ((uintptr_t)raw & (alignment - 1))) & (alignment - 1));
+    memcpy(aligned, old, bytes);
+    *allocation = raw;
+    return aligned;
+}
+
 HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_count,
                              const uint32_t *indices, size_t segment_count,
                              const hairobb_build_options *options, hairobb_bvh **out)
 {
     hairobb_build_options opt;
     hairobb__builder b;
+    hairobb__range root;
+    hairobb__tries tries;
     hairobb_bvh *bvh;
     hairobb_result result;
-    size_t i;
-    float identity[9];
+    size_t i, extra;
+    void *leaf_allocation = NULL;
 
     if (out) *out = NULL;
     if (!out || !vertices || !indices || segment_count == 0) return HAIROBB_ERROR_INVALID_ARGUMENT;
@@ -1083,14 +1600,24 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     if (opt.hair_space_candidates == 0) opt.hair_space_candidates = 4;
     if (opt.curve_pieces == 0) opt.curve_pieces = 8;
     if ((unsigned)opt.nodes > HAIROBB_NODES_OBB_ONLY || (unsigned)opt.precision > HAIROBB_PRECISION_PIECES ||
-        (unsigned)opt.obb_layout > HAIROBB_OBB_SHARED_ROTATION ||
+        (unsigned)opt.obb_layout > HAIROBB_OBB_COMPRESSED ||
+        (unsigned)opt.spatial_splits > HAIROBB_OFF || (unsigned)opt.clustering > HAIROBB_OFF ||
+        !(opt.spatial_split_budget >= 0.0f && opt.spatial_split_budget <= 4.0f) ||
         opt.max_leaf_size > HAIROBB__MAX_LEAF || opt.hair_space_candidates > HAIROBB__MAX_CANDIDATES ||
         opt.curve_pieces > HAIROBB__MAX_PIECES)
         return HAIROBB_ERROR_INVALID_ARGUMENT;
+    /* the defaults the bench chose (see README, "Ablation") */
+    if (opt.obb_layout == HAIROBB_OBB_DEFAULT) opt.obb_layout = HAIROBB_OBB_COMPRESSED;
+    if (opt.spatial_splits == HAIROBB_AUTO) opt.spatial_splits = HAIROBB_OFF;
+    if (opt.clustering == HAIROBB_AUTO) opt.clustering = HAIROBB_OFF;
+    if (opt.spatial_split_budget == 0.0f) opt.spatial_split_budget = 0.25f;
     result = hairobb__validate(vertices, vertex_count, indices, segment_count);
     if (result != HAIROBB_OK) return result;
-    if (segment_count > (size_t)-1 / (6 * sizeof(float))) return HAIROBB_ERROR_TOO_LARGE;
 
+    extra = opt.spatial_splits == HAIROBB_ON ? (size_t)((double)segment_count * opt.spatial_split_budget) : 0;
+    if (segment_count > (size_t)-1 / 2 - extra ||
+        segment_count + extra > (size_t)-1 / (6 * sizeof(float)) || segment_count + extra > 0xffffffffu)
+        return HAIROBB_ERROR_TOO_LARGE;
     memset(&b, 0, sizeof b);
     b.vertices = vertices;
     b.indices = indices;
@@ -1099,57 +1626,75 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     b.obb_layout = opt.obb_layout;
     b.max_leaf = opt.max_leaf_size;
     b.candidates = opt.hair_space_candidates;
+    b.progress = opt.progress;
+    b.progress_user = opt.progress_user;
+    b.capacity = segment_count + extra;
     bvh = HAIROBB__CAST(hairobb_bvh *, HAIROBB_MALLOC(sizeof *bvh, b.user));
-    b.world_boxes = HAIROBB__CAST(float *, HAIROBB_MALLOC(6 * sizeof(float) * segment_count, b.user));
-    b.frame_boxes = HAIROBB__CAST(float *, HAIROBB_MALLOC(6 * sizeof(float) * segment_count, b.user));
-    b.ids = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(sizeof(uint32_t) * segment_count, b.user));
-    if (!bvh || !b.world_boxes || !b.frame_boxes || !b.ids) goto out_of_memory;
+    b.ids = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(sizeof(uint32_t) * b.capacity, b.user));
+    b.ranges = HAIROBB__CAST(float *, HAIROBB_MALLOC(2 * sizeof(float) * b.capacity, b.user));
+    b.world_boxes = HAIROBB__CAST(float *, HAIROBB_MALLOC(6 * sizeof(float) * b.capacity, b.user));
+    b.frame_boxes = HAIROBB__CAST(float *, HAIROBB_MALLOC(6 * sizeof(float) * b.capacity, b.user));
+    b.leaf_prims = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(sizeof(uint32_t) * b.capacity, b.user));
+    b.error = HAIROBB_ERROR_OUT_OF_MEMORY;
+    if (!bvh || !b.ids || !b.ranges || !b.world_boxes || !b.frame_boxes || !b.leaf_prims) goto failed;
+    b.error = HAIROBB_OK;
     memset(bvh, 0, sizeof *bvh);
 
-    hairobb__identity_frame(identity);
     hairobb__box_empty(bvh->lower, bvh->upper);
     for (i = 0; i < segment_count; ++i) {
-        float *box = b.world_boxes + 6 * i;
-        hairobb__segment_box(vertices + 4 * (size_t)indices[i], identity, NULL, box, box + 3);
-        hairobb__box_grow(bvh->lower, bvh->upper, box, box + 3);
         b.ids[i] = (uint32_t)i;
+        hairobb__set_range(&b, i, 0.0f, 1.0f);
+        hairobb__box_grow(bvh->lower, bvh->upper, b.world_boxes + 6 * i, b.world_boxes + 6 * i + 3);
     }
-    bvh->root = hairobb__build_range(&b, 0, segment_count, 0);
-    if (b.out_of_memory) goto out_of_memory;
+    root.begin = 0; root.end = segment_count; root.cap = b.capacity;
+    memset(&tries, 0, sizeof tries);
+    tries.enabled = HAIROBB__TRY_HAIR_SPACE | (opt.spatial_splits == HAIROBB_ON ? HAIROBB__TRY_SPATIAL : 0u) |
+                    (opt.clustering == HAIROBB_ON ? HAIROBB__TRY_CLUSTER : 0u);
+    bvh->root = hairobb__build_range(&b, &root, 0, tries);
+    if (b.error != HAIROBB_OK) goto failed;
+    if (b.progress && b.progress(b.progress_user, 1.0f)) { b.error = HAIROBB_ERROR_CANCELLED; goto failed; }
 
-    /* shrink the node memory to its exact size: memory_bytes reports what stays */
+    /* keep exactly what tracing needs: memory_bytes reports what stays */
+    b.error = HAIROBB_ERROR_OUT_OF_MEMORY;
     if (b.node_bytes) {
-        unsigned char *allocation = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(b.node_bytes + 64, b.user));
-        if (!allocation) goto out_of_memory;
+        void *allocation;
+        bvh->nodes = HAIROBB__CAST(unsigned char *, hairobb__shrink(b.nodes, b.node_bytes, 64, &allocation, b.user));
+        if (!bvh->nodes) goto failed;
         bvh->node_allocation = allocation;
-        bvh->nodes = allocation + ((64 - ((uintptr_t)allocation & 63)) & 63);
-        memcpy(bvh->nodes, b.nodes, b.node_bytes);
         bvh->node_bytes = b.node_bytes;
-        HAIROBB_FREE(b.node_allocation, b.user);
     }
+    bvh->leaf_prims = HAIROBB__CAST(uint32_t *, hairobb__shrink(b.leaf_prims, sizeof(uint32_t) * b.leaf_count, 1,
+                                                                &leaf_allocation, b.user));
+    if (!bvh->leaf_prims) goto failed;
+    HAIROBB_FREE(b.leaf_prims, b.user);
+    if (b.node_allocation) HAIROBB_FREE(b.node_allocation, b.user);
+    HAIROBB_FREE(b.ids, b.user);
+    HAIROBB_FREE(b.ranges, b.user);
     HAIROBB_FREE(b.world_boxes, b.user);
     HAIROBB_FREE(b.frame_boxes, b.user);
     hairobb__pad_box(bvh->lower, bvh->upper);
     bvh->vertices = vertices;
     bvh->indices = indices;
     bvh->allocator_user = b.user;
-    bvh->leaf_prims = b.ids;
-    bvh->leaf_prim_count = segment_count;
+    bvh->leaf_prim_count = b.leaf_count;
     bvh->precision = opt.precision;
     hairobb__setup_pieces(bvh, (int)opt.curve_pieces);
     bvh->stats = b.stats;
     bvh->stats.node_bytes = b.node_bytes;
-    bvh->stats.leaf_bytes = sizeof(uint32_t) * segment_count;
+    bvh->stats.leaf_bytes = sizeof(uint32_t) * b.leaf_count;
     *out = bvh;
     return HAIROBB_OK;
 
-out_of_memory:
+failed:
+    if (bvh && bvh->node_allocation) HAIROBB_FREE(bvh->node_allocation, b.user);
     if (b.node_allocation) HAIROBB_FREE(b.node_allocation, b.user);
+    if (b.ids) HAIROBB_FREE(b.ids, b.user);
+    if (b.ranges) HAIROBB_FREE(b.ranges, b.user);
     if (b.world_boxes) HAIROBB_FREE(b.world_boxes, b.user);
     if (b.frame_boxes) HAIROBB_FREE(b.frame_boxes, b.user);
-    if (b.ids) HAIROBB_FREE(b.ids, b.user);
+    if (b.leaf_prims) HAIROBB_FREE(b.leaf_prims, b.user);
     if (bvh) HAIROBB_FREE(bvh, b.user);
-    return HAIROBB_ERROR_OUT_OF_MEMORY;
+    return b.error;
 }
 
 HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh)
@@ -1245,19 +1790,23 @@ static hairobb__vn hairobb__far_scale(hairobb__vn tfar)
     return hairobb__vn_mul(tfar, hairobb__vn_set1(HAIROBB__FAR_SCALE));
 }
 
+/* One axis of a slab test: the near and far planes of every child. */
+static void hairobb__slab_axis(hairobb__vn lower, hairobb__vn upper, const hairobb__slab_ray *slab, int k,
+                               hairobb__vn *tn, hairobb__vn *tf)
+{
+    hairobb__vn o = hairobb__vn_set1(slab->org[k]), r = hairobb__vn_set1(slab->rdir[k]);
+    hairobb__vn near_plane = slab->near_is_upper[k] ? upper : lower, far_plane = slab->near_is_upper[k] ? lower : upper;
+    *tn = hairobb__vn_max(hairobb__vn_mul(hairobb__vn_sub(near_plane, o), r), *tn);
+    *tf = hairobb__vn_min(hairobb__vn_mul(hairobb__vn_sub(far_plane, o), r), *tf);
+}
+
 /* Slab test of a node's boxes ([axis][child] arrays) in the slab ray's frame. */
 static int hairobb__intersect_boxes(const float (*lower)[HAIROBB__W], const float (*upper)[HAIROBB__W], const hairobb__slab_ray *slab,
                                     const hairobb__ray_state *rs, float dist[HAIROBB__W])
 {
     hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
     int k;
-    for (k = 0; k < 3; ++k) {
-        hairobb__vn o = hairobb__vn_set1(slab->org[k]), r = hairobb__vn_set1(slab->rdir[k]);
-        const float *near_plane = slab->near_is_upper[k] ? upper[k] : lower[k];
-        const float *far_plane = slab->near_is_upper[k] ? lower[k] : upper[k];
-        tn = hairobb__vn_max(hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_load(near_plane), o), r), tn);
-        tf = hairobb__vn_min(hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_load(far_plane), o), r), tf);
-    }
+    for (k = 0; k < 3; ++k) hairobb__slab_axis(hairobb__vn_load(lower[k]), hairobb__vn_load(upper[k]), slab, k, &tn, &tf);
     hairobb__vn_store(dist, tn);
     return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
 }
@@ -1275,6 +1824,37 @@ static int hairobb__intersect_rotated_node(const hairobb__rotated_node *node, co
     }
     hairobb__slab_setup(&slab, org, dir);
     return hairobb__intersect_boxes(node->lower, node->upper, &slab, rs, dist);
+}
+
+/* Bytes decoded to the planes the builder checked; the ray moved to the
+   node's centre, and rotated by the decoded frame for a rotated node. */
+static int hairobb__intersect_compressed_node(const hairobb__compressed_node *node, int rotated,
+                                              const hairobb__ray_state *rs, float dist[HAIROBB__W])
+{
+    hairobb__slab_ray slab;
+    hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
+    float moved[3];
+    int k;
+    for (k = 0; k < 3; ++k) moved[k] = rs->org[k] - node->centre[k];
+    if (rotated) {
+        float frame[9], org[3], dir[3];
+        hairobb__decode_rotation(node->rotation, frame);
+        for (k = 0; k < 3; ++k) {
+            org[k] = hairobb__dot3(frame + 3 * k, moved);
+            dir[k] = hairobb__dot3(frame + 3 * k, rs->dir);
+        }
+        hairobb__slab_setup(&slab, org, dir);
+    } else {
+        slab = rs->world;
+        memcpy(slab.org, moved, sizeof moved);
+    }
+    for (k = 0; k < 3; ++k) {
+        hairobb__vn step = hairobb__vn_set1(node->step[k]);
+        hairobb__slab_axis(hairobb__vn_mul(hairobb__vn_from_bytes(node->lower[k]), step),
+                           hairobb__vn_mul(hairobb__vn_from_bytes(node->upper[k]), step), &slab, k, &tn, &tf);
+    }
+    hairobb__vn_store(dist, tn);
+    return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
 }
 
 static int hairobb__intersect_obb_node(const hairobb__obb_node *node, const hairobb__ray_state *rs, float dist[HAIROBB__W])
@@ -1330,6 +1910,10 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
             } else if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_ROTATED) {
                 bits = hairobb__intersect_rotated_node(HAIROBB__CAST(const hairobb__rotated_node *, node), rs, dist);
                 child = HAIROBB__CAST(const hairobb__rotated_node *, node)->child;
+            } else if (HAIROBB__REF_TYPE(ref) >= HAIROBB__REF_QAABB) {
+                bits = hairobb__intersect_compressed_node(HAIROBB__CAST(const hairobb__compressed_node *, node),
+                                                          HAIROBB__REF_TYPE(ref) == HAIROBB__REF_QOBB, rs, dist);
+                child = HAIROBB__CAST(const hairobb__compressed_node *, node)->child;
             } else {
                 bits = hairobb__intersect_obb_node(HAIROBB__CAST(const hairobb__obb_node *, node), rs, dist);
                 child = HAIROBB__CAST(const hairobb__obb_node *, node)->child;

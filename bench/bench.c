@@ -117,6 +117,7 @@ typedef struct variant {
     hairobb_obb_layout obb_layout;
     hairobb_precision precision;
     unsigned curve_pieces;
+    hairobb_switch spatial_splits, clustering;
     int embree_type, embree_rate; /* rate 0 = Embree's default */
     /* Embree's round curves are swept spheres, not the reference's ribbon:
        their "errors" measure the difference of surfaces, not accuracy. */
@@ -124,22 +125,29 @@ typedef struct variant {
     int on_chart;        /* a point of the run time against error chart */
 } variant;
 
-#define HAIROBB_ROW(key, label, nodes, layout, precision, pieces, on_chart) \
-    {key, label, LIB_HAIROBB, HAIROBB_NODES_##nodes, HAIROBB_OBB_##layout, HAIROBB_PRECISION_##precision, pieces, 0, 0, 1, on_chart}
+#define HAIROBB_ROW(key, label, nodes, layout, spatial, cluster, precision, pieces, on_chart) \
+    {key, label, LIB_HAIROBB, HAIROBB_NODES_##nodes, HAIROBB_##layout, HAIROBB_PRECISION_##precision, pieces, \
+     HAIROBB_##spatial, HAIROBB_##cluster, 0, 0, 1, on_chart}
 #define EMBREE_ROW(key, label, type, rate, comparable, on_chart) \
-    {key, label, LIB_EMBREE, HAIROBB_NODES_MIXED, HAIROBB_OBB_PER_CHILD, HAIROBB_PRECISION_EXACT, 0, type, rate, comparable, on_chart}
+    {key, label, LIB_EMBREE, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 0, HAIROBB_AUTO, HAIROBB_AUTO, \
+     type, rate, comparable, on_chart}
 static const variant all_variants[] = {
     /* precision points: exact and pieces-only intersectors, 4 to 16 pieces */
-    HAIROBB_ROW("default", "hairobb default", MIXED, PER_CHILD, EXACT, 8, 1),
-    HAIROBB_ROW("exact4", "hairobb exact 4", MIXED, PER_CHILD, EXACT, 4, 1),
-    HAIROBB_ROW("exact16", "hairobb exact 16", MIXED, PER_CHILD, EXACT, 16, 1),
-    HAIROBB_ROW("pieces4", "hairobb pieces 4", MIXED, PER_CHILD, PIECES, 4, 1),
-    HAIROBB_ROW("pieces8", "hairobb pieces 8", MIXED, PER_CHILD, PIECES, 8, 1),
-    HAIROBB_ROW("pieces16", "hairobb pieces 16", MIXED, PER_CHILD, PIECES, 16, 1),
-    /* ablation of the node policy; "mixed" is the default row */
-    HAIROBB_ROW("aabb", "hairobb AABB-only", AABB_ONLY, PER_CHILD, EXACT, 8, 0),
-    HAIROBB_ROW("obb", "hairobb OBB-only", OBB_ONLY, PER_CHILD, EXACT, 8, 0),
-    HAIROBB_ROW("shared", "hairobb shared rot.", MIXED, SHARED_ROTATION, EXACT, 8, 0),
+    HAIROBB_ROW("default", "hairobb default", MIXED, OBB_DEFAULT, AUTO, AUTO, EXACT, 8, 1),
+    HAIROBB_ROW("exact4", "hairobb exact 4", MIXED, OBB_DEFAULT, AUTO, AUTO, EXACT, 4, 1),
+    HAIROBB_ROW("exact16", "hairobb exact 16", MIXED, OBB_DEFAULT, AUTO, AUTO, EXACT, 16, 1),
+    HAIROBB_ROW("pieces4", "hairobb pieces 4", MIXED, OBB_DEFAULT, AUTO, AUTO, PIECES, 4, 1),
+    HAIROBB_ROW("pieces8", "hairobb pieces 8", MIXED, OBB_DEFAULT, AUTO, AUTO, PIECES, 8, 1),
+    HAIROBB_ROW("pieces16", "hairobb pieces 16", MIXED, OBB_DEFAULT, AUTO, AUTO, PIECES, 16, 1),
+    /* the paper's ablation: node policy, then each heuristic and the compression added */
+    HAIROBB_ROW("aabb", "hairobb AABB-only", AABB_ONLY, OBB_PER_CHILD, OFF, OFF, EXACT, 8, 0),
+    HAIROBB_ROW("obb", "hairobb OBB-only", OBB_ONLY, OBB_PER_CHILD, OFF, OFF, EXACT, 8, 0),
+    HAIROBB_ROW("mixed-uncompressed", "hairobb mixed", MIXED, OBB_PER_CHILD, OFF, OFF, EXACT, 8, 0),
+    HAIROBB_ROW("spatial", "hairobb +spatial", MIXED, OBB_PER_CHILD, ON, OFF, EXACT, 8, 0),
+    HAIROBB_ROW("spatial-compressed", "hairobb +sp +compr", MIXED, OBB_COMPRESSED, ON, OFF, EXACT, 8, 0),
+    HAIROBB_ROW("spatial-compressed-cluster", "hairobb +sp+co+cl", MIXED, OBB_COMPRESSED, ON, ON, EXACT, 8, 0),
+    HAIROBB_ROW("shared", "hairobb shared rot.", MIXED, OBB_SHARED_ROTATION, OFF, OFF, EXACT, 8, 0),
+    HAIROBB_ROW("compressed", "hairobb compressed", MIXED, OBB_COMPRESSED, OFF, OFF, EXACT, 8, 0),
     EMBREE_ROW("embree-r4", "Embree flat r4", EMB_FLAT_BEZIER, 4, 1, 1),
     EMBREE_ROW("embree-r8", "Embree flat r8", EMB_FLAT_BEZIER, 8, 1, 1),
     EMBREE_ROW("embree-r16", "Embree flat r16", EMB_FLAT_BEZIER, 16, 1, 1),
@@ -150,17 +158,21 @@ enum { VARIANT_COUNT = sizeof all_variants / sizeof all_variants[0] };
 /* The baseline of every ratio, and the rows of the ablation table (the
    paper's three node policies, all with the default exact intersector). */
 #define BASELINE_KEY "embree-r4"
-static const char *const ablation_keys[] = {"aabb", "obb", "default", "shared"};
-static const char *const ablation_labels[] = {"AABB-only", "OBB-only", "mixed", "mixed shared-R"};
-enum { ABLATION_ROWS = 4 };
+static const char *const ablation_keys[] = {"aabb", "obb", "mixed-uncompressed", "spatial", "spatial-compressed",
+                                            "spatial-compressed-cluster", "shared", "compressed", "default"};
+static const char *const ablation_labels[] = {"AABB-only", "OBB-only", "mixed", "+ spatial", "+ compression",
+                                              "+ clustering", "mixed shared-R", "mixed compr.", "defaults"};
+enum { ABLATION_ROWS = 9 };
 
 /* Named groups for --variants; "mixed" is the default variant by another name. */
 static const struct { const char *name, *members; } variant_groups[] = {
-    {"all", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,shared,embree-r4,embree-r8,embree-r16,embree-round"},
-    {"hairobb", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,shared"},
+    {"all", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
+            "spatial-compressed-cluster,shared,compressed,embree-r4,embree-r8,embree-r16,embree-round"},
+    {"hairobb", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
+                "spatial-compressed-cluster,shared,compressed"},
     {"embree", "embree-r4,embree-r8,embree-r16,embree-round"},
     {"precision", "default,exact4,exact16,pieces4,pieces8,pieces16"},
-    {"ablation", "aabb,obb,default,shared"},
+    {"ablation", "aabb,obb,mixed-uncompressed,spatial,spatial-compressed,spatial-compressed-cluster,shared,compressed,default"},
     {"mixed", "default"},
 };
 
@@ -706,6 +718,8 @@ static hairobb_bvh *build_hairobb(const hair_scene *s, const variant *v, double 
     build_options.obb_layout = v->obb_layout;
     build_options.precision = v->precision;
     build_options.curve_pieces = v->curve_pieces;
+    build_options.spatial_splits = v->spatial_splits;
+    build_options.clustering = v->clustering;
     hairobb_bvh *bvh = NULL;
     double start = scene_now();
     hairobb_result result =
@@ -994,7 +1008,8 @@ static void print_ablation_table(const options *o, const scene_result *results, 
     if (!any)
         return;
     char heading[48];
-    printf("\n=== ablation: node types (exact intersector, 8 pieces; shared-R: one rotation per OBB node)\n");
+    printf("\n=== ablation (exact intersector, 8 pieces): node policy, then spatial splits, compressed nodes and\n"
+           "    clustering added in turn (the paper's table); shared-R and compr. without spatial splits; defaults\n");
     printf("%-12s %-14s", "scene", "nodes");
     for (int k = RAYS_PRIMARY; k <= RAYS_INCOHERENT; k++)
         for (int t = 0; t < o->thread_count_count && o->ray_kind_enabled[k]; t++) {
