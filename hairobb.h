@@ -692,19 +692,40 @@ static hairobb_result hairobb__validate(const float *vertices, size_t vertex_cou
    stored (hairobb__pad_box). */
 static void hairobb__segment_box(const float *cp, const float frame[9], const float *centre, float lower[3], float upper[3])
 {
-    int i, k;
     float radius = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
-    hairobb__box_empty(lower, upper);
-    for (i = 0; i < 4; ++i) {
-        float p[3];
-        for (k = 0; k < 3; ++k) p[k] = centre ? cp[4 * i + k] - centre[k] : cp[4 * i + k];
-        for (k = 0; k < 3; ++k) {
-            float x = hairobb__dot3(frame + 3 * k, p);
-            lower[k] = hairobb__minf(lower[k], x);
-            upper[k] = hairobb__maxf(upper[k], x);
-        }
+    int k;
+#if HAIROBB__SSE
+    /* lanes = the 4 control points; the same products and sums as below */
+    __m128 x = _mm_setr_ps(cp[0], cp[4], cp[8], cp[12]), y = _mm_setr_ps(cp[1], cp[5], cp[9], cp[13]);
+    __m128 z = _mm_setr_ps(cp[2], cp[6], cp[10], cp[14]);
+    if (centre) {
+        x = _mm_sub_ps(x, _mm_set1_ps(centre[0]));
+        y = _mm_sub_ps(y, _mm_set1_ps(centre[1]));
+        z = _mm_sub_ps(z, _mm_set1_ps(centre[2]));
     }
-    for (k = 0; k < 3; ++k) { lower[k] -= radius; upper[k] += radius; }
+    for (k = 0; k < 3; ++k) {
+        __m128 v = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(frame[3 * k]), x), _mm_mul_ps(_mm_set1_ps(frame[3 * k + 1]), y)),
+                              _mm_mul_ps(_mm_set1_ps(frame[3 * k + 2]), z));
+        __m128 swapped = _mm_shuffle_ps(v, v, _MM_SHUFFLE(2, 3, 0, 1));
+        __m128 lo = _mm_min_ps(v, swapped), hi = _mm_max_ps(v, swapped);
+        lo = _mm_min_ps(lo, _mm_shuffle_ps(lo, lo, _MM_SHUFFLE(1, 0, 3, 2)));
+        hi = _mm_max_ps(hi, _mm_shuffle_ps(hi, hi, _MM_SHUFFLE(1, 0, 3, 2)));
+        lower[k] = _mm_cvtss_f32(lo) - radius;
+        upper[k] = _mm_cvtss_f32(hi) + radius;
+    }
+#else
+    float p[4][3], c[3];
+    int i;
+    c[0] = centre ? centre[0] : 0.0f; c[1] = centre ? centre[1] : 0.0f; c[2] = centre ? centre[2] : 0.0f;
+    for (i = 0; i < 4; ++i)
+        for (k = 0; k < 3; ++k) p[i][k] = centre ? cp[4 * i + k] - c[k] : cp[4 * i + k];
+    for (k = 0; k < 3; ++k) {
+        float v[4];
+        for (i = 0; i < 4; ++i) v[i] = frame[3 * k] * p[i][0] + frame[3 * k + 1] * p[i][1] + frame[3 * k + 2] * p[i][2];
+        lower[k] = hairobb__minf(hairobb__minf(v[0], v[1]), hairobb__minf(v[2], v[3])) - radius;
+        upper[k] = hairobb__maxf(hairobb__maxf(v[0], v[1]), hairobb__maxf(v[2], v[3])) + radius;
+    }
+#endif
 }
 
 /* ------------------------------------------------------------------------ */
@@ -892,7 +913,7 @@ static void hairobb__box_at(const hairobb__builder *b, const float *frame, size_
 /* One sweep over binned boxes: counts[bin] enter from the left (entries) and
    leave to the right (exits); for object bins both are the bin's count.
    Keeps the cheapest plane in *best. */
-static void hairobb__sweep_bins(const float bin_lower[][3], const float bin_upper[][3], const size_t *entries,
+static void hairobb__sweep_bins(int bins, const float bin_lower[][3], const float bin_upper[][3], const size_t *entries,
                                 const size_t *exits, float box_cost, int kind, const float *frame, int axis,
                                 float origin, float scale, hairobb__split *best)
 {
@@ -900,14 +921,13 @@ static void hairobb__sweep_bins(const float bin_lower[][3], const float bin_uppe
     size_t right_count[HAIROBB__BINS], left_count = 0;
     int bin;
     hairobb__box_empty(lo, hi);
-    right_count[HAIROBB__BINS - 1] = 0;
-    for (bin = HAIROBB__BINS - 1; bin > 0; --bin) {
+    for (bin = bins - 1; bin > 0; --bin) {
         hairobb__box_grow(lo, hi, bin_lower[bin], bin_upper[bin]);
-        right_count[bin] = exits[bin] + (bin + 1 < HAIROBB__BINS ? right_count[bin + 1] : 0);
+        right_count[bin] = exits[bin] + (bin + 1 < bins ? right_count[bin + 1] : 0);
         right_area[bin] = right_count[bin] ? hairobb__half_area(lo, hi) : 0.0f;
     }
     hairobb__box_empty(lo, hi);
-    for (bin = 0; bin < HAIROBB__BINS - 1; ++bin) {
+    for (bin = 0; bin < bins - 1; ++bin) {
         float cost, left_area;
         hairobb__box_grow(lo, hi, bin_lower[bin], bin_upper[bin]);
         left_count += entries[bin];
@@ -940,7 +960,8 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
 {
     float cmin[3], cmax[3], bmin[3], bmax[3];
     size_t i;
-    int axis;
+    /* fewer bins than references only wastes sweeps */
+    int axis, bins = r->end - r->begin < HAIROBB__BINS ? (int)(r->end - r->begin) : HAIROBB__BINS;
     if (frame) {
         for (i = r->begin; i < r->end; ++i) {
             float scratch[16];
@@ -957,35 +978,46 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
         hairobb__box_grow(cmin, cmax, c, c);
         hairobb__box_grow(bmin, bmax, lower, upper);
     }
-    for (axis = 0; axis < 3; ++axis) {
-        float bin_lower[HAIROBB__BINS][3], bin_upper[HAIROBB__BINS][3];
-        size_t bin_count[HAIROBB__BINS], exits[HAIROBB__BINS];
-        float extent = cmax[axis] - cmin[axis], scale;
+    {
+        /* object binning: one pass over the references for all three axes */
+        float bin_lower[3][HAIROBB__BINS][3], bin_upper[3][HAIROBB__BINS][3], scale[3];
+        size_t bin_count[3][HAIROBB__BINS];
         int bin;
-        if (extent > 0.0f) {
-            scale = (float)HAIROBB__BINS * (1.0f - 1.0f / 1024.0f) / extent;
-            for (bin = 0; bin < HAIROBB__BINS; ++bin) {
-                hairobb__box_empty(bin_lower[bin], bin_upper[bin]);
-                bin_count[bin] = 0;
+        for (axis = 0; axis < 3; ++axis) {
+            float extent = cmax[axis] - cmin[axis];
+            scale[axis] = extent > 0.0f ? (float)bins * (1.0f - 1.0f / 1024.0f) / extent : 0.0f;
+            for (bin = 0; bin < bins; ++bin) {
+                hairobb__box_empty(bin_lower[axis][bin], bin_upper[axis][bin]);
+                bin_count[axis][bin] = 0;
             }
-            for (i = r->begin; i < r->end; ++i) {
-                float lower[3], upper[3];
-                hairobb__box_at(b, frame, i, lower, upper);
-                bin = hairobb__bin_of(0.5f * (lower[axis] + upper[axis]), cmin[axis], scale);
-                hairobb__box_grow(bin_lower[bin], bin_upper[bin], lower, upper);
-                bin_count[bin]++;
-            }
-            hairobb__sweep_bins((const float (*)[3])bin_lower, (const float (*)[3])bin_upper, bin_count, bin_count,
-                                box_cost, HAIROBB__SPLIT_OBJECT, frame, axis, cmin[axis], scale, best);
         }
+        for (i = r->begin; i < r->end; ++i) {
+            float lower[3], upper[3];
+            hairobb__box_at(b, frame, i, lower, upper);
+            for (axis = 0; axis < 3; ++axis) {
+                bin = hairobb__bin_of(0.5f * (lower[axis] + upper[axis]), cmin[axis], scale[axis]);
+                hairobb__box_grow(bin_lower[axis][bin], bin_upper[axis][bin], lower, upper);
+                bin_count[axis][bin]++;
+            }
+        }
+        for (axis = 0; axis < 3; ++axis)
+            if (scale[axis] > 0.0f)
+                hairobb__sweep_bins(bins, (const float (*)[3])bin_lower[axis], (const float (*)[3])bin_upper[axis],
+                                    bin_count[axis], bin_count[axis], box_cost, HAIROBB__SPLIT_OBJECT, frame, axis,
+                                    cmin[axis], scale[axis], best);
+    }
+    for (axis = 0; axis < 3 && spatial_slack > 0; ++axis) {
+        float bin_lower[HAIROBB__BINS][3], bin_upper[HAIROBB__BINS][3], extent, scale;
+        size_t bin_count[HAIROBB__BINS], exits[HAIROBB__BINS];
+        int bin;
         extent = bmax[axis] - bmin[axis];
         if (spatial_slack > 0 && extent > 0.0f) {
             /* each reference enters the bin of its lower end and leaves by that of
                its upper end; in between, its box clipped to each bin's slab is
                what it adds there (an upper bound of its clipped curve) */
             hairobb__split before = *best;
-            scale = (float)HAIROBB__BINS * (1.0f - 1.0f / 1024.0f) / extent;
-            for (bin = 0; bin < HAIROBB__BINS; ++bin) {
+            scale = (float)bins * (1.0f - 1.0f / 1024.0f) / extent;
+            for (bin = 0; bin < bins; ++bin) {
                 hairobb__box_empty(bin_lower[bin], bin_upper[bin]);
                 bin_count[bin] = exits[bin] = 0;
             }
@@ -1006,7 +1038,7 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
                     hairobb__box_grow(bin_lower[bin], bin_upper[bin], lo, hi);
                 }
             }
-            hairobb__sweep_bins((const float (*)[3])bin_lower, (const float (*)[3])bin_upper, bin_count, exits,
+            hairobb__sweep_bins(bins, (const float (*)[3])bin_lower, (const float (*)[3])bin_upper, bin_count, exits,
                                 box_cost, HAIROBB__SPLIT_SPATIAL, frame, axis, bmin[axis], scale, best);
             if (best->cost < before.cost) {
                 /* the budget: count the references straddling the chosen plane */
