@@ -167,7 +167,8 @@ typedef enum hairobb_obb_layout {
     HAIROBB_OBB_DEFAULT = 0,         /* the layout the bench recommends (see BUILD OPTIONS) */
     HAIROBB_OBB_PER_CHILD,           /* an affine map per child (the paper's uncompressed node): 240/464 bytes */
     HAIROBB_OBB_SHARED_ROTATION,     /* one float rotation per node, float boxes in it: 176/304 bytes */
-    HAIROBB_OBB_COMPRESSED           /* one byte rotation, byte boxes; AABB nodes quantised too: 96/160 bytes */
+    HAIROBB_OBB_COMPRESSED,          /* the paper's: one byte rotation, byte boxes (AABB nodes too): 96/160 bytes */
+    HAIROBB_OBB_COMPRESSED_PER_CHILD /* a byte rotation per child, byte boxes (AABB nodes as above): 128/208 bytes */
 } hairobb_obb_layout;
 
 /* A heuristic left to the library's recommendation, forced on, or off. */
@@ -333,6 +334,7 @@ HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray
 #define HAIROBB__REF_ROTATED 4u
 #define HAIROBB__REF_QAABB 5u          /* compressed node, axis-aligned */
 #define HAIROBB__REF_QOBB 6u           /* compressed node, rotated */
+#define HAIROBB__REF_QOBB_PER_CHILD 7u /* compressed node, a rotation per child */
 #define HAIROBB__REF_TYPE(ref) ((unsigned)((ref) & 15u))
 
 /* ------------------------------------------------------------------------ */
@@ -614,8 +616,8 @@ typedef struct hairobb__rotated_node {
 } hairobb__rotated_node;
 
 /* The paper's compressed node: the boxes of all children in one hair space
-   (a rotation quantised to signed bytes, R = q / 127; the identity for an
-   axis-aligned node) around a float centre, each child box as signed bytes
+   (a rotation quantised to signed bytes q = 127 R, used as the frame q
+   itself; the identity for an axis-aligned node) around a float centre, each child box as signed bytes
    times a per-axis float step, rounded outward: 96 bytes 4-wide, 160 8-wide. */
 typedef struct hairobb__compressed_node {
     float centre[3], step[3];
@@ -624,6 +626,19 @@ typedef struct hairobb__compressed_node {
     unsigned char pad[HAIROBB__W == 8 ? 15 : 7];              /* child[] at a multiple of 16 */
     uint64_t child[HAIROBB__W];
 } hairobb__compressed_node;
+/* Compressed with a rotation per child, as the per-child affine node: each
+   child's box is in its own frame rotation[.][child] (127 R), around the
+   node's centre, in steps shared by the node: 128 bytes 4-wide, 208 8-wide. */
+typedef struct hairobb__compressed_obb_node {
+    float centre[3], step[3];
+    signed char rotation[9][HAIROBB__W];                      /* [entry][child] */
+    signed char lower[3][HAIROBB__W], upper[3][HAIROBB__W];   /* [axis][child] in steps */
+#if HAIROBB__W == 4
+    unsigned char pad[12];                                    /* child[] at a multiple of 16 */
+#endif
+    uint64_t child[HAIROBB__W];
+} hairobb__compressed_obb_node;
+typedef char hairobb__compressed_obb_node_size[sizeof(hairobb__compressed_obb_node) == (HAIROBB__W == 8 ? 208 : 128) ? 1 : -1];
 typedef char hairobb__compressed_node_size[sizeof(hairobb__compressed_node) == (HAIROBB__W == 8 ? 160 : 96) ? 1 : -1];
 
 struct hairobb_bvh {
@@ -688,9 +703,11 @@ static hairobb_result hairobb__validate(const float *vertices, size_t vertex_cou
    The ribbon lies in the convex hull of the control points dilated by the
    largest radius (r(u) is a convex combination of the 4 radii), so the box of
    the rotated control points grown by that radius bounds it. centre, if
-   given, is subtracted first. Node boxes are padded for rounding once, when
-   stored (hairobb__pad_box). */
-static void hairobb__segment_box(const float *cp, const float frame[9], const float *centre, float lower[3], float upper[3])
+   given, is subtracted first; row_norms, if given, scale the radius along
+   each row of a frame that is not orthonormal (a quantised one). Node boxes
+   are padded for rounding once, when stored (hairobb__pad_box). */
+static void hairobb__segment_box(const float *cp, const float frame[9], const float *centre, const float *row_norms,
+                                 float lower[3], float upper[3])
 {
     float radius = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
     int k;
@@ -710,8 +727,8 @@ static void hairobb__segment_box(const float *cp, const float frame[9], const fl
         __m128 lo = _mm_min_ps(v, swapped), hi = _mm_max_ps(v, swapped);
         lo = _mm_min_ps(lo, _mm_shuffle_ps(lo, lo, _MM_SHUFFLE(1, 0, 3, 2)));
         hi = _mm_max_ps(hi, _mm_shuffle_ps(hi, hi, _MM_SHUFFLE(1, 0, 3, 2)));
-        lower[k] = _mm_cvtss_f32(lo) - radius;
-        upper[k] = _mm_cvtss_f32(hi) + radius;
+        lower[k] = _mm_cvtss_f32(lo) - (row_norms ? radius * row_norms[k] : radius);
+        upper[k] = _mm_cvtss_f32(hi) + (row_norms ? radius * row_norms[k] : radius);
     }
 #else
     float p[4][3], c[3];
@@ -722,8 +739,8 @@ static void hairobb__segment_box(const float *cp, const float frame[9], const fl
     for (k = 0; k < 3; ++k) {
         float v[4];
         for (i = 0; i < 4; ++i) v[i] = frame[3 * k] * p[i][0] + frame[3 * k + 1] * p[i][1] + frame[3 * k + 2] * p[i][2];
-        lower[k] = hairobb__minf(hairobb__minf(v[0], v[1]), hairobb__minf(v[2], v[3])) - radius;
-        upper[k] = hairobb__maxf(hairobb__maxf(v[0], v[1]), hairobb__maxf(v[2], v[3])) + radius;
+        lower[k] = hairobb__minf(hairobb__minf(v[0], v[1]), hairobb__minf(v[2], v[3])) - (row_norms ? radius * row_norms[k] : radius);
+        upper[k] = hairobb__maxf(hairobb__maxf(v[0], v[1]), hairobb__maxf(v[2], v[3])) + (row_norms ? radius * row_norms[k] : radius);
     }
 #endif
 }
@@ -809,7 +826,7 @@ static void hairobb__prim_box(const hairobb__builder *b, size_t i, const float *
         memcpy(upper, b->world_boxes + 6 * i + 3, 3 * sizeof(float));
     } else {
         float scratch[16];
-        hairobb__segment_box(hairobb__ref_points(b, i, scratch), frame, NULL, lower, upper);
+        hairobb__segment_box(hairobb__ref_points(b, i, scratch), frame, NULL, NULL, lower, upper);
     }
 }
 
@@ -965,7 +982,7 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
     if (frame) {
         for (i = r->begin; i < r->end; ++i) {
             float scratch[16];
-            hairobb__segment_box(hairobb__ref_points(b, i, scratch), frame, NULL, b->frame_boxes + 6 * i, b->frame_boxes + 6 * i + 3);
+            hairobb__segment_box(hairobb__ref_points(b, i, scratch), frame, NULL, NULL, b->frame_boxes + 6 * i, b->frame_boxes + 6 * i + 3);
         }
     }
     hairobb__box_empty(cmin, cmax);
@@ -1122,10 +1139,14 @@ static void hairobb__node_box(const hairobb__builder *b, const hairobb__range *r
                               const float *centre, float lower[3], float upper[3])
 {
     size_t i;
+    float norms[3];
+    int k;
+    for (k = 0; k < 3; ++k)     /* rounded up: the radius must not shrink */
+        norms[k] = sqrtf(hairobb__dot3(frame + 3 * k, frame + 3 * k)) * (1.0f + 1.0f / 1048576.0f);
     hairobb__box_empty(lower, upper);
     for (i = r->begin; i < r->end; ++i) {
         float lo[3], hi[3], scratch[16];
-        hairobb__segment_box(hairobb__ref_points(b, i, scratch), frame, centre, lo, hi);
+        hairobb__segment_box(hairobb__ref_points(b, i, scratch), frame, centre, norms, lo, hi);
         hairobb__box_grow(lower, upper, lo, hi);
     }
     hairobb__pad_box(lower, upper);
@@ -1220,7 +1241,7 @@ static void hairobb__set_range(hairobb__builder *b, size_t i, float u0, float u1
     b->ranges[2 * i] = u0;
     b->ranges[2 * i + 1] = u1;
     hairobb__identity_frame(identity);
-    hairobb__segment_box(hairobb__ref_points(b, i, scratch), identity, NULL, b->world_boxes + 6 * i, b->world_boxes + 6 * i + 3);
+    hairobb__segment_box(hairobb__ref_points(b, i, scratch), identity, NULL, NULL, b->world_boxes + 6 * i, b->world_boxes + 6 * i + 3);
 }
 
 /* Side of a reference for split: 0 left, 1 right, 2 straddling a spatial plane. */
@@ -1396,17 +1417,20 @@ static void hairobb__store_obb(hairobb__obb_node *node, int lane, const float fr
     }
 }
 
-/* The frame a compressed node's bytes decode to; traversal decodes the same way. */
+/* The frame a compressed node's bytes decode to: the rotation times 127,
+   left unscaled (slab distances do not change with the scale, and the
+   traversal saves the multiplies); both builder and traversal use it. */
 static void hairobb__decode_rotation(const signed char q[9], float frame[9])
 {
     int k;
-    for (k = 0; k < 9; ++k) frame[k] = (float)q[k] * (1.0f / 127.0f);
+    for (k = 0; k < 9; ++k) frame[k] = (float)q[k];
 }
 
 /* Child boxes (in the node's frame, around its centre) to bytes: a step per
    axis so the largest coordinate fits 127 steps, then each plane rounded
    outward and checked against the product the traversal computes. */
-static void hairobb__store_compressed(hairobb__compressed_node *node, int count,
+static void hairobb__store_compressed(float step_out[3], signed char (*lower_bytes)[HAIROBB__W],
+                                      signed char (*upper_bytes)[HAIROBB__W], int count,
                                       const float lower[][3], const float upper[][3])
 {
     int i, k;
@@ -1415,7 +1439,7 @@ static void hairobb__store_compressed(hairobb__compressed_node *node, int count,
         for (i = 0; i < count; ++i) largest = hairobb__maxf(largest, hairobb__maxf(fabsf(lower[i][k]), fabsf(upper[i][k])));
         step = hairobb__maxf(largest * (1.0f / 127.0f) * (1.0f + 1.0f / 65536.0f), 1e-30f);
         while (127.0f * step < largest) step = nextafterf(step, FLT_MAX);
-        node->step[k] = step;
+        step_out[k] = step;
         for (i = 0; i < HAIROBB__W; ++i) {
             int lo = 127, hi = -128;      /* empty lane: lower above upper */
             if (i < count) {
@@ -1426,8 +1450,8 @@ static void hairobb__store_compressed(hairobb__compressed_node *node, int count,
                 while (lo > -127 && (float)lo * step > lower[i][k]) --lo;
                 while (hi < 127 && (float)hi * step < upper[i][k]) ++hi;
             }
-            node->lower[k][i] = (signed char)lo;
-            node->upper[k][i] = (signed char)hi;
+            lower_bytes[k][i] = (signed char)lo;
+            upper_bytes[k][i] = (signed char)hi;
         }
     }
 }
@@ -1477,12 +1501,14 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
     if (b->policy == HAIROBB_NODES_AABB_ONLY) use_obb = 0;
 
     if (b->obb_layout == HAIROBB_OBB_COMPRESSED) node_type = use_obb ? HAIROBB__REF_QOBB : HAIROBB__REF_QAABB;
+    else if (b->obb_layout == HAIROBB_OBB_COMPRESSED_PER_CHILD) node_type = use_obb ? HAIROBB__REF_QOBB_PER_CHILD : HAIROBB__REF_QAABB;
     else if (use_obb && b->obb_layout == HAIROBB_OBB_PER_CHILD) node_type = HAIROBB__REF_OBB;
     else if (use_obb) node_type = HAIROBB__REF_ROTATED;
     else node_type = HAIROBB__REF_AABB;
     node_size = node_type == HAIROBB__REF_OBB ? sizeof(hairobb__obb_node)
               : node_type == HAIROBB__REF_ROTATED ? sizeof(hairobb__rotated_node)
-              : node_type == HAIROBB__REF_AABB ? sizeof(hairobb__aabb_node) : sizeof(hairobb__compressed_node);
+              : node_type == HAIROBB__REF_AABB ? sizeof(hairobb__aabb_node)
+              : node_type == HAIROBB__REF_QOBB_PER_CHILD ? sizeof(hairobb__compressed_obb_node) : sizeof(hairobb__compressed_node);
     /* every layout ends with child[W] */
     child_offset = node_size - HAIROBB__W * sizeof(uint64_t);
     offset = hairobb__alloc_node(b, node_size);
@@ -1509,6 +1535,24 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
             hairobb__store_obb(node, i, frame, lower, upper);
             node->child[i] = HAIROBB__REF_EMPTY;
         }
+    } else if (node_type == HAIROBB__REF_QOBB_PER_CHILD) {
+        hairobb__compressed_obb_node *node = HAIROBB__CAST(hairobb__compressed_obb_node *, (void *)(b->nodes + offset));
+        float lower[HAIROBB__W][3], upper[HAIROBB__W][3];
+        memset(node, 0, sizeof *node);
+        hairobb__range_centre(b, ranges, count, node->centre);
+        for (i = 0; i < count; ++i) {
+            float frame[9];
+            signed char q[9];
+            int k;
+            hairobb__choose_hair_space(b, &ranges[i], 1, 1, frame);
+            for (k = 0; k < 9; ++k) node->rotation[k][i] = q[k] = (signed char)lrintf(frame[k] * 127.0f);
+            hairobb__decode_rotation(q, frame);
+            hairobb__node_box(b, &ranges[i], frame, node->centre, lower[i], upper[i]);
+        }
+        hairobb__store_compressed(node->step, node->lower, node->upper, count, (const float (*)[3])lower, (const float (*)[3])upper);
+        for (i = count; i < HAIROBB__W; ++i)    /* empty lanes: the identity, so their inverted boxes miss */
+            node->rotation[0][i] = node->rotation[4][i] = node->rotation[8][i] = 127;
+        for (i = 0; i < HAIROBB__W; ++i) node->child[i] = HAIROBB__REF_EMPTY;
     } else if (node_type == HAIROBB__REF_QAABB || node_type == HAIROBB__REF_QOBB) {
         hairobb__compressed_node *node = HAIROBB__CAST(hairobb__compressed_node *, (void *)(b->nodes + offset));
         float frame[9], lower[HAIROBB__W][3], upper[HAIROBB__W][3];
@@ -1521,7 +1565,7 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
         }
         hairobb__range_centre(b, ranges, count, node->centre);
         for (i = 0; i < count; ++i) hairobb__node_box(b, &ranges[i], frame, node->centre, lower[i], upper[i]);
-        hairobb__store_compressed(node, count, (const float (*)[3])lower, (const float (*)[3])upper);
+        hairobb__store_compressed(node->step, node->lower, node->upper, count, (const float (*)[3])lower, (const float (*)[3])upper);
         for (i = 0; i < HAIROBB__W; ++i) node->child[i] = HAIROBB__REF_EMPTY;
     } else {
         /* AABB and rotated nodes: all boxes in one frame (world axes, no centre, for AABB) */
@@ -1632,14 +1676,14 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     if (opt.hair_space_candidates == 0) opt.hair_space_candidates = 4;
     if (opt.curve_pieces == 0) opt.curve_pieces = 8;
     if ((unsigned)opt.nodes > HAIROBB_NODES_OBB_ONLY || (unsigned)opt.precision > HAIROBB_PRECISION_PIECES ||
-        (unsigned)opt.obb_layout > HAIROBB_OBB_COMPRESSED ||
+        (unsigned)opt.obb_layout > HAIROBB_OBB_COMPRESSED_PER_CHILD ||
         (unsigned)opt.spatial_splits > HAIROBB_OFF || (unsigned)opt.clustering > HAIROBB_OFF ||
         !(opt.spatial_split_budget >= 0.0f && opt.spatial_split_budget <= 4.0f) ||
         opt.max_leaf_size > HAIROBB__MAX_LEAF || opt.hair_space_candidates > HAIROBB__MAX_CANDIDATES ||
         opt.curve_pieces > HAIROBB__MAX_PIECES)
         return HAIROBB_ERROR_INVALID_ARGUMENT;
     /* the defaults the bench chose (see README, "Ablation") */
-    if (opt.obb_layout == HAIROBB_OBB_DEFAULT) opt.obb_layout = HAIROBB_OBB_COMPRESSED;
+    if (opt.obb_layout == HAIROBB_OBB_DEFAULT) opt.obb_layout = HAIROBB_OBB_COMPRESSED_PER_CHILD;
     if (opt.spatial_splits == HAIROBB_AUTO) opt.spatial_splits = HAIROBB_OFF;
     if (opt.clustering == HAIROBB_AUTO) opt.clustering = HAIROBB_OFF;
     if (opt.spatial_split_budget == 0.0f) opt.spatial_split_budget = 0.25f;
@@ -1889,6 +1933,33 @@ static int hairobb__intersect_compressed_node(const hairobb__compressed_node *no
     return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
 }
 
+/* Each child's rotation decoded as in the builder, the ray transformed per
+   child (lanes), then slab tests against its decoded byte planes. */
+static int hairobb__intersect_compressed_obb_node(const hairobb__compressed_obb_node *node, const hairobb__ray_state *rs,
+                                                  float dist[HAIROBB__W])
+{
+    hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
+    hairobb__vn ox = hairobb__vn_set1(rs->org[0] - node->centre[0]), oy = hairobb__vn_set1(rs->org[1] - node->centre[1]);
+    hairobb__vn oz = hairobb__vn_set1(rs->org[2] - node->centre[2]);
+    hairobb__vn dx = hairobb__vn_set1(rs->dir[0]), dy = hairobb__vn_set1(rs->dir[1]), dz = hairobb__vn_set1(rs->dir[2]);
+    hairobb__vn one = hairobb__vn_set1(1.0f);
+    int k;
+    for (k = 0; k < 3; ++k) {
+        hairobb__vn m0 = hairobb__vn_from_bytes(node->rotation[3 * k]), m1 = hairobb__vn_from_bytes(node->rotation[3 * k + 1]);
+        hairobb__vn m2 = hairobb__vn_from_bytes(node->rotation[3 * k + 2]);
+        hairobb__vn o = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, ox), hairobb__vn_mul(m1, oy)), hairobb__vn_mul(m2, oz));
+        hairobb__vn d = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, dx), hairobb__vn_mul(m1, dy)), hairobb__vn_mul(m2, dz));
+        hairobb__vn r = hairobb__vn_div(one, hairobb__vn_nonzero(d, HAIROBB__TINY_DIR));
+        hairobb__vn step = hairobb__vn_set1(node->step[k]);
+        hairobb__vn t0 = hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_mul(hairobb__vn_from_bytes(node->lower[k]), step), o), r);
+        hairobb__vn t1 = hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_mul(hairobb__vn_from_bytes(node->upper[k]), step), o), r);
+        tn = hairobb__vn_max(hairobb__vn_min(t0, t1), tn);
+        tf = hairobb__vn_min(hairobb__vn_max(t0, t1), tf);
+    }
+    hairobb__vn_store(dist, tn);
+    return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
+}
+
 static int hairobb__intersect_obb_node(const hairobb__obb_node *node, const hairobb__ray_state *rs, float dist[HAIROBB__W])
 {
     hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
@@ -1942,6 +2013,9 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
             } else if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_ROTATED) {
                 bits = hairobb__intersect_rotated_node(HAIROBB__CAST(const hairobb__rotated_node *, node), rs, dist);
                 child = HAIROBB__CAST(const hairobb__rotated_node *, node)->child;
+            } else if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_QOBB_PER_CHILD) {
+                bits = hairobb__intersect_compressed_obb_node(HAIROBB__CAST(const hairobb__compressed_obb_node *, node), rs, dist);
+                child = HAIROBB__CAST(const hairobb__compressed_obb_node *, node)->child;
             } else if (HAIROBB__REF_TYPE(ref) >= HAIROBB__REF_QAABB) {
                 bits = hairobb__intersect_compressed_node(HAIROBB__CAST(const hairobb__compressed_node *, node),
                                                           HAIROBB__REF_TYPE(ref) == HAIROBB__REF_QOBB, rs, dist);

@@ -144,10 +144,11 @@ static const variant all_variants[] = {
     HAIROBB_ROW("obb", "hairobb OBB-only", OBB_ONLY, OBB_PER_CHILD, OFF, OFF, EXACT, 8, 0),
     HAIROBB_ROW("mixed-uncompressed", "hairobb mixed", MIXED, OBB_PER_CHILD, OFF, OFF, EXACT, 8, 0),
     HAIROBB_ROW("spatial", "hairobb +spatial", MIXED, OBB_PER_CHILD, ON, OFF, EXACT, 8, 0),
-    HAIROBB_ROW("spatial-compressed", "hairobb +sp +compr", MIXED, OBB_COMPRESSED, ON, OFF, EXACT, 8, 0),
-    HAIROBB_ROW("spatial-compressed-cluster", "hairobb +sp+co+cl", MIXED, OBB_COMPRESSED, ON, ON, EXACT, 8, 0),
+    HAIROBB_ROW("spatial-compressed", "hairobb +sp +compr", MIXED, OBB_COMPRESSED_PER_CHILD, ON, OFF, EXACT, 8, 0),
+    HAIROBB_ROW("spatial-compressed-cluster", "hairobb +sp+co+cl", MIXED, OBB_COMPRESSED_PER_CHILD, ON, ON, EXACT, 8, 0),
+    /* other node layouts: one float rotation per node, the paper's compressed node (one byte rotation) */
     HAIROBB_ROW("shared", "hairobb shared rot.", MIXED, OBB_SHARED_ROTATION, OFF, OFF, EXACT, 8, 0),
-    HAIROBB_ROW("compressed", "hairobb compressed", MIXED, OBB_COMPRESSED, OFF, OFF, EXACT, 8, 0),
+    HAIROBB_ROW("compressed-shared", "hairobb compr. shared", MIXED, OBB_COMPRESSED, OFF, OFF, EXACT, 8, 0),
     EMBREE_ROW("embree-r4", "Embree flat r4", EMB_FLAT_BEZIER, 4, 1, 1),
     EMBREE_ROW("embree-r8", "Embree flat r8", EMB_FLAT_BEZIER, 8, 1, 1),
     EMBREE_ROW("embree-r16", "Embree flat r16", EMB_FLAT_BEZIER, 16, 1, 1),
@@ -159,20 +160,20 @@ enum { VARIANT_COUNT = sizeof all_variants / sizeof all_variants[0] };
    paper's three node policies, all with the default exact intersector). */
 #define BASELINE_KEY "embree-r4"
 static const char *const ablation_keys[] = {"aabb", "obb", "mixed-uncompressed", "spatial", "spatial-compressed",
-                                            "spatial-compressed-cluster", "shared", "compressed", "default"};
+                                            "spatial-compressed-cluster", "shared", "compressed-shared", "default"};
 static const char *const ablation_labels[] = {"AABB-only", "OBB-only", "mixed", "+ spatial", "+ compression",
-                                              "+ clustering", "mixed shared-R", "mixed compr.", "defaults"};
+                                              "+ clustering", "shared-R float", "shared-R bytes", "defaults"};
 enum { ABLATION_ROWS = 9 };
 
 /* Named groups for --variants; "mixed" is the default variant by another name. */
 static const struct { const char *name, *members; } variant_groups[] = {
     {"all", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
-            "spatial-compressed-cluster,shared,compressed,embree-r4,embree-r8,embree-r16,embree-round"},
+            "spatial-compressed-cluster,shared,compressed-shared,embree-r4,embree-r8,embree-r16,embree-round"},
     {"hairobb", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
-                "spatial-compressed-cluster,shared,compressed"},
+                "spatial-compressed-cluster,shared,compressed-shared"},
     {"embree", "embree-r4,embree-r8,embree-r16,embree-round"},
     {"precision", "default,exact4,exact16,pieces4,pieces8,pieces16"},
-    {"ablation", "aabb,obb,mixed-uncompressed,spatial,spatial-compressed,spatial-compressed-cluster,shared,compressed,default"},
+    {"ablation", "aabb,obb,mixed-uncompressed,spatial,spatial-compressed,spatial-compressed-cluster,shared,compressed-shared,default"},
     {"mixed", "default"},
 };
 
@@ -1009,7 +1010,8 @@ static void print_ablation_table(const options *o, const scene_result *results, 
         return;
     char heading[48];
     printf("\n=== ablation (exact intersector, 8 pieces): node policy, then spatial splits, compressed nodes and\n"
-           "    clustering added in turn (the paper's table); shared-R and compr. without spatial splits; defaults\n");
+           "    clustering added in turn (the paper's table; compression: a byte rotation per child); then nodes with\n"
+           "    one rotation shared by the children, in floats and in bytes (the paper's compressed node); defaults\n");
     printf("%-12s %-14s", "scene", "nodes");
     for (int k = RAYS_PRIMARY; k <= RAYS_INCOHERENT; k++)
         for (int t = 0; t < o->thread_count_count && o->ray_kind_enabled[k]; t++) {
@@ -1287,7 +1289,9 @@ static void print_help(void)
            "  --rays LIST         ray sets: primary, incoherent, shadow (default all)\n"
            "  --threads LIST      thread counts, e.g. 1,8 (default 1 and the number of cores)\n"
            "  --variants LIST     variants or groups (default all):\n"
-           "                      hairobb: default (= mixed), exact4, exact16, pieces4, pieces8, pieces16, aabb, obb, shared\n"
+           "                      hairobb: default (= mixed), exact4, exact16, pieces4, pieces8, pieces16,\n"
+           "                        aabb, obb, mixed-uncompressed, spatial, spatial-compressed,\n"
+           "                        spatial-compressed-cluster, shared, compressed-shared\n"
            "                      Embree: embree-r4, embree-r8, embree-r16 (flat), embree-round\n"
            "                      groups: all, hairobb, embree, precision, ablation\n"
            "  --passes N          timed passes per measurement, median reported (default %d, 3..64)\n"
