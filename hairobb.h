@@ -1225,16 +1225,20 @@ static void hairobb__copy_position(hairobb__builder *b, size_t to, size_t from)
     memcpy(b->world_boxes + 6 * to, b->world_boxes + 6 * from, 6 * sizeof(float));
 }
 
+/* Swaps two references, with their boxes in the frame last binned. */
 static void hairobb__swap_positions(hairobb__builder *b, size_t i, size_t j)
 {
     uint32_t id = b->ids[i];
-    float range[2], box[6];
+    float range[2], box[6], frame_box[6];
     memcpy(range, b->ranges + 2 * i, sizeof range);
     memcpy(box, b->world_boxes + 6 * i, sizeof box);
+    memcpy(frame_box, b->frame_boxes + 6 * i, sizeof frame_box);
     hairobb__copy_position(b, i, j);
+    memcpy(b->frame_boxes + 6 * i, b->frame_boxes + 6 * j, sizeof frame_box);
     b->ids[j] = id;
     memcpy(b->ranges + 2 * j, range, sizeof range);
     memcpy(b->world_boxes + 6 * j, box, sizeof box);
+    memcpy(b->frame_boxes + 6 * j, frame_box, sizeof frame_box);
 }
 
 static void hairobb__set_range(hairobb__builder *b, size_t i, float u0, float u1)
@@ -1246,12 +1250,13 @@ static void hairobb__set_range(hairobb__builder *b, size_t i, float u0, float u1
     hairobb__segment_box(hairobb__ref_points(b, i, scratch), identity, NULL, NULL, b->world_boxes + 6 * i, b->world_boxes + 6 * i + 3);
 }
 
-/* Side of a reference for split: 0 left, 1 right, 2 straddling a spatial plane. */
+/* Side of a reference for split: 0 left, 1 right, 2 straddling a spatial
+   plane. A hair-space split was just binned: its boxes are in frame_boxes. */
 static int hairobb__side(const hairobb__builder *b, size_t i, const hairobb__split *split)
 {
     float lower[3], upper[3];
     if (split->kind == HAIROBB__SPLIT_CLUSTER) return hairobb__cluster_of(b, i, split->direction);
-    hairobb__prim_box(b, i, split->hair_space ? split->frame : NULL, lower, upper);
+    hairobb__box_at(b, split->hair_space ? split->frame : NULL, i, lower, upper);
     if (split->kind == HAIROBB__SPLIT_SPATIAL) {
         int first = hairobb__bin_of(lower[split->axis], split->bin_origin, split->bin_scale);
         int last = hairobb__bin_of(upper[split->axis], split->bin_origin, split->bin_scale);
