@@ -6,11 +6,11 @@ ARCH     ?= -march=native
 CFLAGS   ?= -O2 -g
 WARN      = -std=c99 -Wall -Wextra -pedantic
 BASE      = $(WARN) $(CFLAGS) -ffp-contract=off -I.
-LIBS      = -lm
+LIBS      = -lm -pthread
 EMBREE    = -lembree3
 B         = build
 
-TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_unit_w8 $(B)/test_scenes $(B)/test_simd $(B)/test_simd_w8 $(B)/test_accuracy $(B)/test_far
+TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_unit_w8 $(B)/test_options $(B)/test_scenes $(B)/test_simd $(B)/test_simd_w8 $(B)/test_accuracy $(B)/test_far
 
 .PHONY: all test deps compile-matrix bench examples clean
 all: $(TESTS) $(B)/bench examples
@@ -25,11 +25,16 @@ $(B)/test_reference: tests/test_reference.c tests/reference.h | $(B)
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
 
 # white-box tests on 4-wide and on 8-wide nodes
+# (their counting allocators lock a pthread mutex: builds allocate on several threads)
 $(B)/test_unit: tests/test_unit.c hairobb.h tests/reference.h tests/check.h | $(B)
-	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=4 $< -o $@ $(LIBS)
+	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=4 $< -o $@ $(LIBS) -lpthread
 
 $(B)/test_unit_w8: tests/test_unit.c hairobb.h tests/reference.h tests/check.h | $(B)
-	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=8 $< -o $@ $(LIBS)
+	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=8 $< -o $@ $(LIBS) -lpthread
+
+# black-box: every combination of build options against the reference
+$(B)/test_options: tests/test_options.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS) -lpthread
 
 $(B)/test_scenes: tests/test_scenes.c tests/scenes.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
@@ -63,7 +68,7 @@ $(B)/bench: bench/bench.c hairobb.h tests/reference.h tests/scenes.h tests/embre
 compile-matrix: | $(B)
 	@printf '#define HAIROBB_IMPLEMENTATION\n#include "hairobb.h"\nint main(void){return 0;}\n' > $(B)/matrix.c
 	@set -e; for cc in gcc clang; do command -v $$cc >/dev/null || continue; \
-	  for flags in "" "-DHAIROBB_STATIC" "-DHAIROBB_NO_SIMD" "-mavx2" "-mavx2 -DHAIROBB_NODE_WIDTH=8" "-DHAIROBB_NO_SIMD -DHAIROBB_NODE_WIDTH=8"; do \
+	  for flags in "" "-DHAIROBB_STATIC" "-DHAIROBB_NO_SIMD" "-mavx2" "-mavx2 -DHAIROBB_NODE_WIDTH=8" "-DHAIROBB_NO_SIMD -DHAIROBB_NODE_WIDTH=8" "-DHAIROBB_NO_THREADS"; do \
 	    $$cc $(WARN) -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
 	    $$cc -x c++ -std=c++11 -Wall -Wextra -pedantic -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
 	    echo "compile-matrix: $$cc $$flags (C99 and C++11) clean"; done; done

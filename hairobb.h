@@ -1424,7 +1424,9 @@ typedef struct hairobb__child {
 static void hairobb__finish_positions(hairobb__builder *b, size_t count)
 {
     b->positions_done += count;
-    if (b->progress && b->task_limit && b->positions_done >= b->next_report && b->error == HAIROBB_OK) {
+    /* the last report, 1, comes when the tree is complete */
+    if (b->progress && b->task_limit && b->positions_done >= b->next_report && b->positions_done < b->capacity &&
+        b->error == HAIROBB_OK) {
         b->next_report = b->positions_done + b->capacity / 128 + 1;
         if (b->progress(b->progress_user, (float)((double)b->positions_done / (double)b->capacity)))
             b->error = HAIROBB_ERROR_CANCELLED;
@@ -1949,6 +1951,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     b.progress_user = opt.progress_user;
     b.capacity = segment_count + extra;
     bvh = HAIROBB__CAST(hairobb_bvh *, HAIROBB_MALLOC(sizeof *bvh, b.user));
+    if (bvh) memset(bvh, 0, sizeof *bvh);     /* the failure path reads it */
     b.ids = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(sizeof(uint32_t) * b.capacity, b.user));
     b.ranges = HAIROBB__CAST(float *, HAIROBB_MALLOC(2 * sizeof(float) * b.capacity, b.user));
     b.world_boxes = HAIROBB__CAST(float *, HAIROBB_MALLOC(6 * sizeof(float) * b.capacity, b.user));
@@ -1956,7 +1959,6 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     b.error = HAIROBB_ERROR_OUT_OF_MEMORY;
     if (!bvh || !b.ids || !b.ranges || !b.world_boxes || !b.frame_boxes) goto failed;
     b.error = HAIROBB_OK;
-    memset(bvh, 0, sizeof *bvh);
 
     hairobb__box_empty(bvh->lower, bvh->upper);
     for (i = 0; i < segment_count; ++i) {

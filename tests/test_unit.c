@@ -1,29 +1,64 @@
-/* test_unit.c - white-box tests of hairobb.h: frames, hair space, bounds
-   conservativeness of every node, BVH traversal against a brute-force loop
-   over the same kernel, bad input and allocation failure. */
+/* test_unit.c - white-box tests of hairobb.h: frames, hair space, clipped
+   segment parts, bounds conservativeness of every node of every layout
+   (compressed nodes decoded as the traversal decodes them; with spatial
+   splits, every ribbon point inside the boxes of some leaf holding its
+   segment), BVH traversal against a brute-force loop over the same kernel,
+   bad input, allocation failure and cancellation. */
 #define _POSIX_C_SOURCE 200809L
 #include <stdlib.h>
 #include <string.h>
+#include <stdio.h>
+#include <time.h>
+#include <pthread.h>
 
-/* Counting allocator that can be told to fail the N-th allocation. */
+/* Counting allocator that can be told to fail the N-th allocation. It
+   fills what it hands out with garbage (so reading memory the library did
+   not write shows), and checks every free against the blocks it handed out
+   (a free of anything else is counted, not done). The build may allocate
+   and free on several threads: one lock guards every allocator. */
+#define TEST_MAX_LIVE 1024
 typedef struct test_allocator {
     long calls, fail_at, live;
+    long bad_frees;
+    int failed;                       /* the fail_at-th call came */
+    void *blocks[TEST_MAX_LIVE];
 } test_allocator;
+static pthread_mutex_t test_allocator_lock = PTHREAD_MUTEX_INITIALIZER;
 static void *test_malloc(size_t size, void *user)
 {
     test_allocator *a = (test_allocator *)user;
-    void *p;
+    void *p = NULL;
+    int i;
     if (!a) return malloc(size);
-    if (a->calls++ == a->fail_at) return NULL;
-    p = malloc(size);
-    if (p) a->live++;
+    pthread_mutex_lock(&test_allocator_lock);
+    if (a->calls++ == a->fail_at) {
+        a->failed = 1;
+    } else if ((p = malloc(size)) != NULL) {
+        memset(p, 0xa5, size);
+        for (i = 0; i < TEST_MAX_LIVE && a->blocks[i]; ++i) {}
+        if (i == TEST_MAX_LIVE) { printf("test allocator: too many live blocks\n"); exit(1); }
+        a->blocks[i] = p;
+        a->live++;
+    }
+    pthread_mutex_unlock(&test_allocator_lock);
     return p;
 }
 static void test_free(void *p, void *user)
 {
     test_allocator *a = (test_allocator *)user;
-    if (a && p) a->live--;
-    free(p);
+    int i;
+    if (!p) return;
+    if (!a) { free(p); return; }
+    pthread_mutex_lock(&test_allocator_lock);
+    for (i = 0; i < TEST_MAX_LIVE && a->blocks[i] != p; ++i) {}
+    if (i == TEST_MAX_LIVE) {
+        a->bad_frees++;
+    } else {
+        a->blocks[i] = NULL;
+        a->live--;
+        free(p);
+    }
+    pthread_mutex_unlock(&test_allocator_lock);
 }
 #define HAIROBB_MALLOC(size, user) test_malloc(size, user)
 #define HAIROBB_FREE(ptr, user) test_free(ptr, user)
@@ -100,12 +135,33 @@ static void test_frames(void)
     CHECK(bad == 0, "%d frame defects (orthonormal, right-handed, z = direction)", bad);
 }
 
+/* Half the surface area of a segment's box in a frame (rows = axes): its
+   control points rotated, grown by the largest radius. */
+static float frame_box_area(const float *cp, const float frame[9])
+{
+    float lo[3], hi[3];
+    int i, k;
+    for (k = 0; k < 3; ++k) {
+        lo[k] = INFINITY;
+        hi[k] = -INFINITY;
+        for (i = 0; i < 4; ++i) {
+            float x = hairobb__dot3(frame + 3 * k, cp + 4 * i);
+            lo[k] = x < lo[k] ? x : lo[k];
+            hi[k] = x > hi[k] ? x : hi[k];
+        }
+        lo[k] -= 0.001f;    /* the radius of these hairs */
+        hi[k] += 0.001f;
+    }
+    return hairobb__half_area(lo, hi);
+}
+
 static void test_hair_space(void)
 {
     float *vertices;
     uint32_t *indices;
     size_t i, n = 200;
     hairobb__builder b;
+    hairobb__range whole;
     float frame[9], dir[3] = {0.6f, 0.0f, 0.8f}, area_hair = 0.0f, area_world = 0.0f, identity[9];
     make_scene(n, &vertices, &indices);
     /* a bundle of parallel straight hairs along dir */
@@ -124,137 +180,531 @@ static void test_hair_space(void)
     memset(&b, 0, sizeof b);
     b.vertices = vertices; b.indices = indices; b.candidates = 4;
     b.ids = (uint32_t *)malloc(sizeof(uint32_t) * n);
-    for (i = 0; i < n; ++i) b.ids[i] = (uint32_t)i;
+    b.ranges = (float *)malloc(2 * sizeof(float) * n);
+    for (i = 0; i < n; ++i) {
+        b.ids[i] = (uint32_t)i;
+        b.ranges[2 * i] = 0.0f;     /* whole segments */
+        b.ranges[2 * i + 1] = 1.0f;
+    }
+    whole.begin = 0; whole.end = n; whole.cap = n;
     hairobb__identity_frame(identity);
-    hairobb__choose_hair_space(&b, 0, n, 0, frame);
+    hairobb__choose_hair_space(&b, &whole, 1, 0, frame);
     CHECK(fabsf(hairobb__dot3(frame + 6, dir)) > 0.999f, "hair space z . hair direction = %g", hairobb__dot3(frame + 6, dir));
     for (i = 0; i < n; ++i) {
-        float lo[3], hi[3];
-        hairobb__segment_box(vertices + 16 * i, frame, NULL, lo, hi);
-        area_hair += hairobb__half_area(lo, hi);
-        hairobb__segment_box(vertices + 16 * i, identity, NULL, lo, hi);
-        area_world += hairobb__half_area(lo, hi);
+        area_hair += frame_box_area(vertices + 16 * i, frame);
+        area_world += frame_box_area(vertices + 16 * i, identity);
     }
     CHECK(area_hair < 0.1f * area_world, "hair-space boxes %g vs world boxes %g", area_hair, area_world);
     free(b.ids);
+    free(b.ranges);
     free(vertices);
     free(indices);
 }
 
-/* Every sampled point of every ribbon (the ball of radius r(u) around P(u)
-   contains the ribbon's cross-section for any ray) lies inside the boxes of
-   its leaf's ancestors. Checked in double on the stored float boxes. */
-typedef struct box_path {
-    int depth;
-    uint64_t refs[128];
-    int lanes[128];
-} box_path;
+/* A clipped part [u0, u1] of a segment (what spatial splits make) has
+   control points whose curve is the segment's on [u0, u1], radius included,
+   up to the float rounding of the control points. */
+static void test_clipped_parts(void)
+{
+    float *vertices;
+    uint32_t *indices;
+    hairobb__builder b;
+    int trial, bad = 0, same = 1;
+    double worst = 0.0;
+    make_scene(1, &vertices, &indices);
+    memset(&b, 0, sizeof b);
+    b.vertices = vertices; b.indices = indices;
+    b.ids = (uint32_t *)malloc(sizeof(uint32_t));
+    b.ranges = (float *)malloc(2 * sizeof(float));
+    b.ids[0] = 0;
+    for (trial = 0; trial < 2000; ++trial) {
+        float scratch[16], u0 = rnd(), u1 = rnd();
+        const float *part;
+        int k, s;
+        for (k = 0; k < 16; ++k) vertices[k] = (k % 4 == 3) ? 0.01f * rnd() : 4.0f * rnd() - 2.0f;
+        if (u0 > u1) { float t = u0; u0 = u1; u1 = t; }
+        if (trial == 0) { u0 = 0.0f; u1 = 1.0f; }
+        b.ranges[0] = u0; b.ranges[1] = u1;
+        part = hairobb__ref_points(&b, 0, scratch);
+        if (trial == 0) same = part == vertices;   /* a whole segment is the caller's points */
+        for (s = 0; s <= 16; ++s) {
+            double t = s / 16.0, u = u0 + t * ((double)u1 - u0);
+            for (k = 0; k < 4; ++k) {
+                double c[4], d[4], want = 0.0, got = 0.0, wt[4], wu[4];
+                int j;
+                wt[0] = (1 - t) * (1 - t) * (1 - t); wt[1] = 3 * t * (1 - t) * (1 - t); wt[2] = 3 * t * t * (1 - t); wt[3] = t * t * t;
+                wu[0] = (1 - u) * (1 - u) * (1 - u); wu[1] = 3 * u * (1 - u) * (1 - u); wu[2] = 3 * u * u * (1 - u); wu[3] = u * u * u;
+                for (j = 0; j < 4; ++j) { c[j] = vertices[4 * j + k]; d[j] = part[4 * j + k]; }
+                for (j = 0; j < 4; ++j) { want += wu[j] * c[j]; got += wt[j] * d[j]; }
+                /* control points rounded to float: a few ulps of the largest coordinate (2) */
+                if (fabs(got - want) > 4e-7) ++bad;
+                if (fabs(got - want) > worst) worst = fabs(got - want);
+            }
+        }
+    }
+    CHECK(same, "the whole segment's control points are not the caller's");
+    CHECK(bad == 0, "%d clipped-part points off the segment (worst %g)", bad, worst);
+    free(b.ids);
+    free(b.ranges);
+    free(vertices);
+    free(indices);
+}
 
-static int point_in_node(const hairobb_bvh *bvh, uint64_t ref, int lane, const double p[3])
+/* Three bundles of bent segments (1 long, middle bent out by 0.05-0.2 in a
+   random direction, radius 0.002 growing to 0.005) along x, y and z, all
+   crossing one small region (centres within +-0.2): object splits cannot
+   separate them, so spatial splits clip many and clusters by orientation pay. */
+static void make_crossed_scene(size_t n, float **vertices, uint32_t **indices)
+{
+    size_t i;
+    int k, j;
+    *vertices = (float *)malloc(16 * sizeof(float) * n);
+    *indices = (uint32_t *)malloc(sizeof(uint32_t) * n);
+    for (i = 0; i < n; ++i) {
+        float *v = *vertices + 16 * i, o[3], e[3], len, bend = 0.05f + 0.15f * rnd();
+        int axis = (int)(i % 3);
+        for (k = 0; k < 3; ++k) { o[k] = 0.4f * (rnd() - 0.5f); e[k] = rnd() - 0.5f; }
+        e[axis] = 0.0f;
+        len = sqrtf(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+        if (!(len > 1e-3f)) { e[(axis + 1) % 3] = 1.0f; len = 1.0f; }
+        for (k = 0; k < 4; ++k) {
+            float t = (float)k / 3.0f - 0.5f, w = (k == 1 || k == 2) ? bend / 0.75f : 0.0f;
+            for (j = 0; j < 3; ++j) v[4 * k + j] = o[j] + (j == axis ? t : 0.0f) + w * e[j] / len;
+            v[4 * k + 3] = 0.002f + 0.001f * (float)k;
+        }
+        (*indices)[i] = (uint32_t)(4 * i);
+    }
+}
+
+/* Bounds: every sampled point of every ribbon lies inside the decoded boxes
+   of all ancestors of some leaf holding its segment. Without spatial splits
+   a segment is in one leaf, so that is every ancestor of its leaf; with
+   them it is in the leaves of its clipped parts, and each part is bounded
+   only by the boxes above its own leaf. Points: at 33 u, the ball of radius
+   r(u) around P(u) in 26 directions and the ribbon's cross-section (the
+   disc orthogonal to P'(u): every ray sees the ribbon's width in it) in 8.
+   Checked in double on the stored boxes, decoded as the traversal does. */
+#define MAX_PATH 128
+
+/* A child box as the traversal sees it, decoded once: p is inside where
+   lower <= m (p - centre) + offset <= upper on each axis, in double on the
+   stored values. */
+typedef struct decoded_box {
+    double centre[3], m[9], offset[3], lower[3], upper[3];
+} decoded_box;
+
+typedef struct tree_walk {
+    const hairobb_bvh *bvh;
+    int depth;                         /* the current path: boxes of its ancestors */
+    size_t path[MAX_PATH];
+    decoded_box *boxes;
+    size_t box_count, box_cap;
+    size_t *path_boxes;                /* every leaf's ancestors' boxes, from leaf_path[leaf] on */
+    size_t path_used, path_cap;
+    size_t *leaf_path, *leaf_depth;
+    size_t leaf_count, leaf_cap;
+    uint32_t *occ_segment;             /* each leaf reference: segment and leaf */
+    size_t *occ_leaf;
+    size_t occ_count, occ_cap;
+    size_t node_types[16];
+    unsigned max_depth;
+    long bad_refs;                     /* out of range, unknown type, too deep */
+} tree_walk;
+
+static void *grow(void *p, size_t *cap, size_t need, size_t size)
+{
+    if (need <= *cap) return p;
+    while (*cap < need) *cap = *cap ? 2 * *cap : 1024;
+    p = realloc(p, *cap * size);
+    if (!p) { printf("out of memory in the test\n"); exit(1); }
+    return p;
+}
+
+static const uint64_t *node_children(const hairobb_bvh *bvh, uint64_t ref)
 {
     const void *node = bvh->nodes + (ref & ~(uint64_t)15);
+    switch (HAIROBB__REF_TYPE(ref)) {
+    case HAIROBB__REF_AABB: return ((const hairobb__aabb_node *)node)->child;
+    case HAIROBB__REF_OBB: return ((const hairobb__obb_node *)node)->child;
+    case HAIROBB__REF_ROTATED: return ((const hairobb__rotated_node *)node)->child;
+    case HAIROBB__REF_QAABB:
+    case HAIROBB__REF_QOBB: return ((const hairobb__compressed_node *)node)->child;
+#ifdef HAIROBB__REF_QOBB_PER_CHILD
+    case HAIROBB__REF_QOBB_PER_CHILD: return ((const hairobb__compressed_obb_node *)node)->child;
+#endif
+    default: return NULL;
+    }
+}
+
+static size_t node_size(unsigned type)
+{
+    switch (type) {
+    case HAIROBB__REF_AABB: return sizeof(hairobb__aabb_node);
+    case HAIROBB__REF_OBB: return sizeof(hairobb__obb_node);
+    case HAIROBB__REF_ROTATED: return sizeof(hairobb__rotated_node);
+    case HAIROBB__REF_QAABB:
+    case HAIROBB__REF_QOBB: return sizeof(hairobb__compressed_node);
+#ifdef HAIROBB__REF_QOBB_PER_CHILD
+    case HAIROBB__REF_QOBB_PER_CHILD: return sizeof(hairobb__compressed_obb_node);
+#endif
+    default: return 0;
+    }
+}
+
+/* Child `lane` of node ref, decoded as the traversal decodes it; 0 for an
+   unknown node type. */
+static int decode_box(const hairobb_bvh *bvh, uint64_t ref, int lane, decoded_box *box)
+{
+    const void *node = bvh->nodes + (ref & ~(uint64_t)15);
+    unsigned type = HAIROBB__REF_TYPE(ref);
     int k;
-    if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_AABB) {
+    memset(box, 0, sizeof *box);
+    box->m[0] = box->m[4] = box->m[8] = 1.0;
+    if (type == HAIROBB__REF_AABB) {
         const hairobb__aabb_node *a = (const hairobb__aabb_node *)node;
-        for (k = 0; k < 3; ++k)
-            if (p[k] < a->lower[k][lane] || p[k] > a->upper[k][lane]) return 0;
-    } else if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_ROTATED) {
+        for (k = 0; k < 3; ++k) { box->lower[k] = a->lower[k][lane]; box->upper[k] = a->upper[k][lane]; }
+    } else if (type == HAIROBB__REF_ROTATED) {
         const hairobb__rotated_node *r = (const hairobb__rotated_node *)node;
-        double m[3];
-        for (k = 0; k < 3; ++k) m[k] = p[k] - r->centre[k];
+        for (k = 0; k < 9; ++k) box->m[k] = r->rotation[k];
         for (k = 0; k < 3; ++k) {
-            double q = r->rotation[3 * k] * m[0] + r->rotation[3 * k + 1] * m[1] + r->rotation[3 * k + 2] * m[2];
-            if (q < r->lower[k][lane] || q > r->upper[k][lane]) return 0;
+            box->centre[k] = r->centre[k];
+            box->lower[k] = r->lower[k][lane];
+            box->upper[k] = r->upper[k][lane];
+        }
+    } else if (type == HAIROBB__REF_QAABB || type == HAIROBB__REF_QOBB) {
+        /* the frame hairobb__decode_rotation makes of the bytes (the identity
+           for an axis-aligned node) applied to p - centre; the planes
+           (float)bytes * step, rounded to float */
+        const hairobb__compressed_node *c = (const hairobb__compressed_node *)node;
+        float frame[9];
+        if (type == HAIROBB__REF_QOBB) hairobb__decode_rotation(c->rotation, frame);
+        else hairobb__identity_frame(frame);
+        for (k = 0; k < 9; ++k) box->m[k] = frame[k];
+        for (k = 0; k < 3; ++k) {
+            box->centre[k] = c->centre[k];
+            box->lower[k] = (float)c->lower[k][lane] * c->step[k];
+            box->upper[k] = (float)c->upper[k][lane] * c->step[k];
+        }
+#ifdef HAIROBB__REF_QOBB_PER_CHILD
+    } else if (type == HAIROBB__REF_QOBB_PER_CHILD) {
+        /* the lane's rotation bytes, converted to float, are the frame */
+        const hairobb__compressed_obb_node *c = (const hairobb__compressed_obb_node *)node;
+        for (k = 0; k < 9; ++k) box->m[k] = (float)c->rotation[k][lane];
+        for (k = 0; k < 3; ++k) {
+            box->centre[k] = c->centre[k];
+            box->lower[k] = (float)c->lower[k][lane] * c->step[k];
+            box->upper[k] = (float)c->upper[k][lane] * c->step[k];
+        }
+#endif
+    } else if (type == HAIROBB__REF_OBB) {
+        /* an affine map onto the unit cube */
+        const hairobb__obb_node *o = (const hairobb__obb_node *)node;
+        for (k = 0; k < 9; ++k) box->m[k] = o->xfm[k][lane];
+        for (k = 0; k < 3; ++k) {
+            box->centre[k] = o->centre[k];
+            box->offset[k] = o->xfm[9 + k][lane];
+            box->lower[k] = 0.0;
+            box->upper[k] = 1.0;
         }
     } else {
-        const hairobb__obb_node *o = (const hairobb__obb_node *)node;
-        double m[3];
-        for (k = 0; k < 3; ++k) m[k] = p[k] - o->centre[k];
-        for (k = 0; k < 3; ++k) {
-            double q = o->xfm[3 * k][lane] * m[0] + o->xfm[3 * k + 1][lane] * m[1] + o->xfm[3 * k + 2][lane] * m[2] + o->xfm[9 + k][lane];
-            if (q < 0.0 || q > 1.0) return 0;
-        }
+        return 0;
     }
     return 1;
 }
 
-static long check_subtree(const hairobb_bvh *bvh, uint64_t ref, box_path *path, long *seen)
+static int point_in_box(const decoded_box *box, const double p[3])
 {
-    long outside = 0;
-    if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_LEAF) {
-        size_t first = (size_t)(ref >> 8), count = (size_t)((ref >> 4) & 15), i;
-        for (i = first; i < first + count; ++i) {
-            const float *cp = bvh->vertices + 4 * (size_t)bvh->indices[bvh->leaf_prims[i]];
-            int s, e, level;
-            ++*seen;
-            for (s = 0; s <= 32; ++s) {
-                double u = s / 32.0, w[4], c[4] = {0, 0, 0, 0};
-                int k;
-                w[0] = (1 - u) * (1 - u) * (1 - u); w[1] = 3 * u * (1 - u) * (1 - u); w[2] = 3 * u * u * (1 - u); w[3] = u * u * u;
-                for (k = 0; k < 4; ++k) c[0] += w[k] * cp[4 * k], c[1] += w[k] * cp[4 * k + 1], c[2] += w[k] * cp[4 * k + 2], c[3] += w[k] * cp[4 * k + 3];
-                for (e = 0; e < 26; ++e) {
-                    double d[3], len, p[3];
-                    d[0] = e % 3 - 1.0; d[1] = (e / 3) % 3 - 1.0; d[2] = e / 9 - 1.0;
-                    if (e == 13) d[2] = 1.0; /* skip the zero vector */
-                    len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-                    for (k = 0; k < 3; ++k) p[k] = c[k] + c[3] * d[k] / len;
-                    for (level = 0; level < path->depth; ++level)
-                        if (!point_in_node(bvh, path->refs[level], path->lanes[level], p)) ++outside;
-                }
-            }
-        }
-        return outside;
+    double d[3];
+    int k;
+    for (k = 0; k < 3; ++k) d[k] = p[k] - box->centre[k];
+    for (k = 0; k < 3; ++k) {
+        double q = box->m[3 * k] * d[0] + box->m[3 * k + 1] * d[1] + box->m[3 * k + 2] * d[2] + box->offset[k];
+        if (q < box->lower[k] || q > box->upper[k]) return 0;
     }
-    if (HAIROBB__REF_TYPE(ref) != HAIROBB__REF_EMPTY) {
-        const void *node = bvh->nodes + (ref & ~(uint64_t)15);
-        const uint64_t *child = HAIROBB__REF_TYPE(ref) == HAIROBB__REF_AABB      ? ((const hairobb__aabb_node *)node)->child
-                                : HAIROBB__REF_TYPE(ref) == HAIROBB__REF_ROTATED ? ((const hairobb__rotated_node *)node)->child
-                                                                                 : ((const hairobb__obb_node *)node)->child;
+    return 1;
+}
+
+static void walk_tree(tree_walk *w, uint64_t ref, unsigned depth)
+{
+    unsigned type = HAIROBB__REF_TYPE(ref);
+    if (type == HAIROBB__REF_LEAF) {
+        size_t first = (size_t)(ref >> 8), count = (size_t)((ref >> 4) & 15), i;
+        if (count == 0 || first + count > w->bvh->leaf_prim_count) { ++w->bad_refs; return; }
+        w->leaf_path = (size_t *)grow(w->leaf_path, &w->leaf_cap, w->leaf_count + 1, sizeof(size_t));
+        w->leaf_depth = (size_t *)realloc(w->leaf_depth, w->leaf_cap * sizeof(size_t));
+        if (!w->leaf_depth) exit(1);
+        w->path_boxes = (size_t *)grow(w->path_boxes, &w->path_cap, w->path_used + (size_t)w->depth, sizeof(size_t));
+        w->leaf_path[w->leaf_count] = w->path_used;
+        w->leaf_depth[w->leaf_count] = (size_t)w->depth;
+        memcpy(w->path_boxes + w->path_used, w->path, (size_t)w->depth * sizeof(size_t));
+        w->path_used += (size_t)w->depth;
+        for (i = first; i < first + count; ++i) {
+            size_t cap = w->occ_cap;
+            w->occ_segment = (uint32_t *)grow(w->occ_segment, &cap, w->occ_count + 1, sizeof(uint32_t));
+            w->occ_leaf = (size_t *)grow(w->occ_leaf, &w->occ_cap, w->occ_count + 1, sizeof(size_t));
+            w->occ_segment[w->occ_count] = w->bvh->leaf_prims[i];
+            w->occ_leaf[w->occ_count] = w->leaf_count;
+            ++w->occ_count;
+        }
+        ++w->leaf_count;
+        if (depth > w->max_depth) w->max_depth = depth;
+        return;
+    }
+    if (type == HAIROBB__REF_EMPTY) return;
+    {
+        const uint64_t *child = node_children(w->bvh, ref);
         int lane;
+        if (!child || w->depth >= MAX_PATH || (ref & ~(uint64_t)15) + node_size(type) > w->bvh->node_bytes) {
+            ++w->bad_refs;
+            return;
+        }
+        w->node_types[type]++;
         for (lane = 0; lane < HAIROBB__W; ++lane) {
             if (child[lane] == HAIROBB__REF_EMPTY) continue;
-            path->refs[path->depth] = ref;
-            path->lanes[path->depth] = lane;
-            path->depth++;
-            outside += check_subtree(bvh, child[lane], path, seen);
-            path->depth--;
+            w->boxes = (decoded_box *)grow(w->boxes, &w->box_cap, w->box_count + 1, sizeof(decoded_box));
+            if (!decode_box(w->bvh, ref, lane, &w->boxes[w->box_count])) { ++w->bad_refs; continue; }
+            w->path[w->depth] = w->box_count++;
+            w->depth++;
+            walk_tree(w, child[lane], depth + 1);
+            w->depth--;
         }
     }
+}
+
+static void free_walk(tree_walk *w)
+{
+    free(w->boxes); free(w->path_boxes); free(w->leaf_path); free(w->leaf_depth);
+    free(w->occ_segment); free(w->occ_leaf);
+}
+
+static int point_in_leaf_path(const tree_walk *w, size_t leaf, const double p[3])
+{
+    size_t level, start = w->leaf_path[leaf];
+    for (level = 0; level < w->leaf_depth[leaf]; ++level)
+        if (!point_in_box(&w->boxes[w->path_boxes[start + level]], p)) return 0;
+    return 1;
+}
+
+/* Counts sampled ribbon points outside every leaf path of their segment;
+   *missing counts segments in no leaf at all. */
+static long points_outside(const tree_walk *w, size_t n, long *missing, long *points)
+{
+    size_t *first = (size_t *)calloc(n + 1, sizeof(size_t)), *leaves = (size_t *)malloc(sizeof(size_t) * (w->occ_count + 1));
+    size_t i, *fill = (size_t *)malloc(sizeof(size_t) * (n + 1));
+    long outside = 0;
+    if (!first || !leaves || !fill) exit(1);
+    for (i = 0; i < w->occ_count; ++i)
+        if (w->occ_segment[i] < n) first[w->occ_segment[i] + 1]++;
+    for (i = 0; i < n; ++i) first[i + 1] += first[i];
+    memcpy(fill, first, sizeof(size_t) * (n + 1));
+    for (i = 0; i < w->occ_count; ++i)
+        if (w->occ_segment[i] < n) leaves[fill[w->occ_segment[i]]++] = w->occ_leaf[i];
+    *missing = 0;
+    *points = 0;
+    for (i = 0; i < n; ++i) {
+        const float *cp = w->bvh->vertices + 4 * (size_t)w->bvh->indices[i];
+        int s, e, k;
+        if (first[i] == first[i + 1]) { ++*missing; continue; }
+        for (s = 0; s <= 32; ++s) {
+            double u = s / 32.0, wt[4], dw[4], c[4] = {0, 0, 0, 0}, t[3] = {0, 0, 0}, a[3], b[3], len;
+            wt[0] = (1 - u) * (1 - u) * (1 - u); wt[1] = 3 * u * (1 - u) * (1 - u); wt[2] = 3 * u * u * (1 - u); wt[3] = u * u * u;
+            dw[0] = -3 * (1 - u) * (1 - u); dw[1] = 3 * (1 - u) * (1 - u) - 6 * u * (1 - u); dw[2] = 6 * u * (1 - u) - 3 * u * u; dw[3] = 3 * u * u;
+            for (k = 0; k < 4; ++k) {
+                c[0] += wt[k] * cp[4 * k]; c[1] += wt[k] * cp[4 * k + 1]; c[2] += wt[k] * cp[4 * k + 2]; c[3] += wt[k] * cp[4 * k + 3];
+                t[0] += dw[k] * cp[4 * k]; t[1] += dw[k] * cp[4 * k + 1]; t[2] += dw[k] * cp[4 * k + 2];
+            }
+            /* a, b: orthonormal pair spanning the plane orthogonal to the tangent */
+            len = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+            if (!(len > 0.0)) { t[0] = 0.0; t[1] = 0.0; t[2] = 1.0; len = 1.0; }
+            for (k = 0; k < 3; ++k) t[k] /= len;
+            if (fabs(t[0]) < 0.9) { a[0] = 0.0; a[1] = t[2]; a[2] = -t[1]; } else { a[0] = -t[2]; a[1] = 0.0; a[2] = t[0]; }
+            len = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+            for (k = 0; k < 3; ++k) a[k] /= len;
+            b[0] = t[1] * a[2] - t[2] * a[1]; b[1] = t[2] * a[0] - t[0] * a[2]; b[2] = t[0] * a[1] - t[1] * a[0];
+            for (e = 0; e < 26 + 8; ++e) {
+                double d[3], p[3];
+                size_t j;
+                int inside = 0;
+                if (e < 26) {
+                    d[0] = e % 3 - 1.0; d[1] = (e / 3) % 3 - 1.0; d[2] = e / 9 - 1.0;
+                    if (e == 13) d[2] = 1.0; /* skip the zero vector */
+                } else {
+                    double angle = (e - 26) * (3.14159265358979323846 / 4.0);
+                    for (k = 0; k < 3; ++k) d[k] = cos(angle) * a[k] + sin(angle) * b[k];
+                }
+                len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                for (k = 0; k < 3; ++k) p[k] = c[k] + c[3] * d[k] / len;
+                ++*points;
+                for (j = first[i]; j < first[i + 1] && !inside; ++j) inside = point_in_leaf_path(w, leaves[j], p);
+                if (!inside) ++outside;
+            }
+        }
+    }
+    free(first);
+    free(leaves);
+    free(fill);
     return outside;
 }
 
-static const char *policy_name[] = {"mixed", "aabb-only", "obb-only", "mixed, shared-rotation OBBs"};
+/* Segment prim alone hits the ray first at exactly t: two segments the ray
+   meets at the same t are equally first, either may be reported. */
+static int hits_at(const hairobb_bvh *bvh, const hairobb_ray *ray, uint32_t prim, float t, size_t n)
+{
+    hairobb__ray_state rs;
+    hairobb__ray_setup(&rs, ray);
+    return prim < n && hairobb__intersect_segment(bvh, &rs, prim, 0) && rs.tfar == t;
+}
+
+typedef struct unit_config {
+    const char *name;
+    int scene;                       /* 0: combed patch (make_scene), 1: crossed bundles */
+    hairobb_node_policy nodes;
+    hairobb_obb_layout layout;
+    hairobb_switch spatial;
+    float budget;
+    hairobb_switch clustering;
+    int expect_clipping, expect_clusters;
+} unit_config;
+
+static const unit_config unit_configs[] = {
+    {"mixed, per-child OBBs", 0, HAIROBB_NODES_MIXED, HAIROBB_OBB_PER_CHILD, HAIROBB_OFF, 0.0f, HAIROBB_OFF, 0, 0},
+    {"aabb-only, plain nodes", 0, HAIROBB_NODES_AABB_ONLY, HAIROBB_OBB_PER_CHILD, HAIROBB_OFF, 0.0f, HAIROBB_OFF, 0, 0},
+    {"obb-only, per-child OBBs", 0, HAIROBB_NODES_OBB_ONLY, HAIROBB_OBB_PER_CHILD, HAIROBB_OFF, 0.0f, HAIROBB_OFF, 0, 0},
+    {"mixed, shared-rotation OBBs", 0, HAIROBB_NODES_MIXED, HAIROBB_OBB_SHARED_ROTATION, HAIROBB_OFF, 0.0f, HAIROBB_OFF, 0, 0},
+    {"mixed, compressed", 0, HAIROBB_NODES_MIXED, HAIROBB_OBB_COMPRESSED, HAIROBB_OFF, 0.0f, HAIROBB_OFF, 0, 0},
+    {"aabb-only, compressed", 0, HAIROBB_NODES_AABB_ONLY, HAIROBB_OBB_COMPRESSED, HAIROBB_OFF, 0.0f, HAIROBB_OFF, 0, 0},
+    {"obb-only, compressed", 0, HAIROBB_NODES_OBB_ONLY, HAIROBB_OBB_COMPRESSED, HAIROBB_OFF, 0.0f, HAIROBB_OFF, 0, 0},
+    {"mixed, default options", 0, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_AUTO, 0.0f, HAIROBB_AUTO, 0, 0},
+    {"crossed: mixed, compressed, spatial splits", 1, HAIROBB_NODES_MIXED, HAIROBB_OBB_COMPRESSED, HAIROBB_ON, 1.0f, HAIROBB_OFF, 1, 0},
+    {"crossed: mixed, per-child OBBs, spatial splits", 1, HAIROBB_NODES_MIXED, HAIROBB_OBB_PER_CHILD, HAIROBB_ON, 1.0f, HAIROBB_OFF, 1, 0},
+    {"crossed: obb-only, shared-rotation, spatial splits", 1, HAIROBB_NODES_OBB_ONLY, HAIROBB_OBB_SHARED_ROTATION, HAIROBB_ON, 1.0f, HAIROBB_OFF, 1, 0},
+    {"crossed: aabb-only, compressed, spatial splits", 1, HAIROBB_NODES_AABB_ONLY, HAIROBB_OBB_COMPRESSED, HAIROBB_ON, 1.0f, HAIROBB_OFF, 1, 0},
+    {"crossed: obb-only, compressed, spatial splits", 1, HAIROBB_NODES_OBB_ONLY, HAIROBB_OBB_COMPRESSED, HAIROBB_ON, 1.0f, HAIROBB_OFF, 1, 0},
+    {"crossed: mixed, compressed, clustering", 1, HAIROBB_NODES_MIXED, HAIROBB_OBB_COMPRESSED, HAIROBB_OFF, 0.0f, HAIROBB_ON, 0, 1},
+    {"crossed: obb-only, per-child OBBs, clustering", 1, HAIROBB_NODES_OBB_ONLY, HAIROBB_OBB_PER_CHILD, HAIROBB_OFF, 0.0f, HAIROBB_ON, 0, 1},
+    {"crossed: mixed, compressed, spatial splits and clustering", 1, HAIROBB_NODES_MIXED, HAIROBB_OBB_COMPRESSED, HAIROBB_ON, 1.0f, HAIROBB_ON, 0, 0},
+#ifdef HAIROBB__REF_QOBB_PER_CHILD
+    {"mixed, compressed per-child", 0, HAIROBB_NODES_MIXED, HAIROBB_OBB_COMPRESSED_PER_CHILD, HAIROBB_OFF, 0.0f, HAIROBB_OFF, 0, 0},
+    {"crossed: obb-only, compressed per-child, spatial splits", 1, HAIROBB_NODES_OBB_ONLY, HAIROBB_OBB_COMPRESSED_PER_CHILD, HAIROBB_ON, 1.0f, HAIROBB_OFF, 1, 0},
+#endif
+};
+#define UNIT_CONFIGS (int)(sizeof unit_configs / sizeof unit_configs[0])
 
 static void test_bounds_and_traversal(void)
 {
-    size_t n = 6000;
-    float *vertices;
-    uint32_t *indices;
-    int policy;
-    make_scene(n, &vertices, &indices);
-    for (policy = 0; policy < 4; ++policy) {
+    size_t counts[2] = {6000, 2000};
+    float *vertices[2];
+    uint32_t *indices[2];
+    int c;
+    make_scene(counts[0], &vertices[0], &indices[0]);
+    make_crossed_scene(counts[1], &vertices[1], &indices[1]);
+    for (c = 0; c < UNIT_CONFIGS; ++c) {
+        const unit_config *config = &unit_configs[c];
+        const char *name = config->name;
+        size_t n = counts[config->scene], expected_bytes = 0;
+        const float *v = vertices[config->scene];
+        const uint32_t *ix = indices[config->scene];
         hairobb_build_options opt;
         hairobb_bvh *bvh = NULL;
         hairobb_stats stats;
-        box_path path;
-        long seen = 0, outside, mismatches = 0, occluded_mismatches = 0, hits = 0;
+        tree_walk w;
+        long outside, missing, points, mismatches = 0, occluded_mismatches = 0, hits = 0;
+        size_t aabb_types, obb_types, type;
+        unsigned layout;
         int r;
+        double t0 = (double)clock();
         memset(&opt, 0, sizeof opt);
-        opt.nodes = policy == 3 ? HAIROBB_NODES_MIXED : (hairobb_node_policy)policy;
-        opt.obb_layout = policy == 3 ? HAIROBB_OBB_SHARED_ROTATION : HAIROBB_OBB_PER_CHILD;
-        CHECK(hairobb_build(vertices, 4 * n, indices, n, &opt, &bvh) == HAIROBB_OK, "build %s", policy_name[policy]);
+        opt.nodes = config->nodes;
+        opt.obb_layout = config->layout;
+        opt.spatial_splits = config->spatial;
+        opt.spatial_split_budget = config->budget;
+        opt.clustering = config->clustering;
+        CHECK(hairobb_build(v, 4 * n, ix, n, &opt, &bvh) == HAIROBB_OK, "build %s", name);
         if (!bvh) continue;
         hairobb_get_stats(bvh, &stats);
-        CHECK(stats.leaf_references == n, "%s: %zu leaf references for %zu segments", policy_name[policy], stats.leaf_references, n);
-        CHECK(policy != HAIROBB_NODES_AABB_ONLY || stats.obb_nodes == 0, "aabb-only built %zu OBB nodes", stats.obb_nodes);
-        CHECK(policy != HAIROBB_NODES_OBB_ONLY || stats.aabb_nodes == 0, "obb-only built %zu AABB nodes", stats.aabb_nodes);
-        CHECK((policy != HAIROBB_NODES_MIXED && policy != 3) || (stats.obb_nodes > 0 && stats.aabb_nodes > 0),
-              "mixed built %zu AABB and %zu OBB nodes", stats.aabb_nodes, stats.obb_nodes);
-        CHECK(hairobb_memory_bytes(bvh) >= stats.node_bytes + stats.leaf_bytes, "memory_bytes %zu", hairobb_memory_bytes(bvh));
-        path.depth = 0;
-        outside = check_subtree(bvh, bvh->root, &path, &seen);
-        CHECK(seen == (long)n, "%s: walked %ld segments of %zu", policy_name[policy], seen, n);
-        CHECK(outside == 0, "%s: %ld ribbon samples outside an ancestor box", policy_name[policy], outside);
+
+        memset(&w, 0, sizeof w);
+        w.bvh = bvh;
+        walk_tree(&w, bvh->root, 0);
+        CHECK(w.bad_refs == 0, "%s: %ld bad node or leaf references", name, w.bad_refs);
+        /* stats describe the tree that is there */
+        for (type = 0; type < 16; ++type) expected_bytes += w.node_types[type] * node_size((unsigned)type);
+        aabb_types = w.node_types[HAIROBB__REF_AABB] + w.node_types[HAIROBB__REF_QAABB];
+        obb_types = w.node_types[HAIROBB__REF_OBB] + w.node_types[HAIROBB__REF_ROTATED] + w.node_types[HAIROBB__REF_QOBB];
+#ifdef HAIROBB__REF_QOBB_PER_CHILD
+        obb_types += w.node_types[HAIROBB__REF_QOBB_PER_CHILD];
+#endif
+        CHECK(stats.aabb_nodes == aabb_types && stats.obb_nodes == obb_types, "%s: stats %zu AABB %zu OBB nodes, tree %zu and %zu",
+              name, stats.aabb_nodes, stats.obb_nodes, aabb_types, obb_types);
+        CHECK(stats.leaves == w.leaf_count && stats.leaf_references == w.occ_count && bvh->leaf_prim_count == w.occ_count,
+              "%s: stats %zu leaves %zu references, tree %zu and %zu", name, stats.leaves, stats.leaf_references, w.leaf_count, w.occ_count);
+        CHECK(stats.max_depth == w.max_depth, "%s: stats depth %u, tree %u", name, stats.max_depth, w.max_depth);
+        CHECK(stats.node_bytes == expected_bytes && bvh->node_bytes == expected_bytes, "%s: %zu node bytes for nodes of %zu", name,
+              stats.node_bytes, expected_bytes);
+        CHECK(hairobb_memory_bytes(bvh) >= stats.node_bytes + stats.leaf_bytes, "%s: memory_bytes %zu", name, hairobb_memory_bytes(bvh));
+        /* the node types the options allow; the default layout is one of the others */
+        layout = config->layout;
+        if (layout == HAIROBB_OBB_DEFAULT) {
+            unsigned other, last = HAIROBB_OBB_COMPRESSED;
+#ifdef HAIROBB__REF_QOBB_PER_CHILD
+            last = HAIROBB_OBB_COMPRESSED_PER_CHILD;
+#endif
+            for (other = 1; other <= last && layout == HAIROBB_OBB_DEFAULT; ++other) {
+                hairobb_bvh *explicit_layout = NULL;
+                hairobb_stats explicit_stats;
+                opt.obb_layout = (hairobb_obb_layout)other;
+                if (hairobb_build(v, 4 * n, ix, n, &opt, &explicit_layout) != HAIROBB_OK) continue;
+                hairobb_get_stats(explicit_layout, &explicit_stats);
+                if (memcmp(&explicit_stats, &stats, sizeof stats) == 0 && explicit_layout->node_bytes == bvh->node_bytes &&
+                    memcmp(explicit_layout->nodes, bvh->nodes, bvh->node_bytes) == 0)
+                    layout = other;
+                hairobb_free(explicit_layout);
+            }
+            opt.obb_layout = config->layout;
+            CHECK(layout != HAIROBB_OBB_DEFAULT, "%s: the default layout builds the tree of no explicit layout", name);
+        }
+        for (type = 0; type < 16; ++type) {
+            int allowed;
+            if (!w.node_types[type]) continue;
+            if (layout == HAIROBB_OBB_DEFAULT) allowed = 1;     /* reported above */
+            else if (layout == HAIROBB_OBB_COMPRESSED) allowed = type == HAIROBB__REF_QAABB || type == HAIROBB__REF_QOBB;
+#ifdef HAIROBB__REF_QOBB_PER_CHILD
+            else if (layout == HAIROBB_OBB_COMPRESSED_PER_CHILD) allowed = type == HAIROBB__REF_QAABB || type == HAIROBB__REF_QOBB_PER_CHILD;
+#endif
+            else if (layout == HAIROBB_OBB_PER_CHILD) allowed = type == HAIROBB__REF_AABB || type == HAIROBB__REF_OBB;
+            else allowed = type == HAIROBB__REF_AABB || type == HAIROBB__REF_ROTATED;
+            CHECK(allowed, "%s: %zu nodes of type %zu", name, w.node_types[type], type);
+        }
+        CHECK(config->nodes != HAIROBB_NODES_AABB_ONLY || stats.obb_nodes == 0, "%s: %zu OBB nodes", name, stats.obb_nodes);
+        CHECK(config->nodes != HAIROBB_NODES_OBB_ONLY || stats.aabb_nodes == 0, "%s: %zu AABB nodes", name, stats.aabb_nodes);
+        CHECK(config->nodes != HAIROBB_NODES_MIXED || config->scene != 0 || (stats.obb_nodes > 0 && stats.aabb_nodes > 0),
+              "%s: %zu AABB and %zu OBB nodes", name, stats.aabb_nodes, stats.obb_nodes);
+        /* references: one per segment, or up to the budget more with spatial splits */
+        if (config->spatial == HAIROBB_ON) {
+            size_t budget = (size_t)((double)n * (config->budget > 0.0f ? config->budget : 0.25f));
+            CHECK(stats.leaf_references >= n && stats.leaf_references <= n + budget, "%s: %zu references for %zu segments, budget %zu",
+                  name, stats.leaf_references, n, budget);
+            CHECK(!config->expect_clipping || stats.leaf_references > n, "%s: spatial splits clipped nothing (%zu references)", name,
+                  stats.leaf_references);
+        } else {
+            CHECK(stats.leaf_references == n, "%s: %zu leaf references for %zu segments", name, stats.leaf_references, n);
+        }
+        if (config->expect_clusters) {
+            /* the scene is built for clusters: they must change the tree */
+            hairobb_bvh *plain = NULL;
+            hairobb_stats plain_stats;
+            opt.clustering = HAIROBB_OFF;
+            CHECK(hairobb_build(v, 4 * n, ix, n, &opt, &plain) == HAIROBB_OK, "%s: build without clustering", name);
+            hairobb_get_stats(plain, &plain_stats);
+            CHECK(memcmp(&plain_stats, &stats, sizeof stats) != 0, "%s: clustering changed nothing", name);
+            hairobb_free(plain);
+        }
+        outside = points_outside(&w, n, &missing, &points);
+        CHECK(missing == 0, "%s: %ld segments in no leaf", name, missing);
+        CHECK(outside == 0, "%s: %ld of %ld ribbon samples outside the boxes of every leaf path of their segment", name, outside, points);
+        printf("%s: %zu AABB + %zu OBB nodes, %zu leaves, %zu references for %zu segments, depth %u\n", name, stats.aabb_nodes,
+               stats.obb_nodes, stats.leaves, stats.leaf_references, n, stats.max_depth);
+        free_walk(&w);
 
         /* the BVH finds exactly what a loop over all segments with the same kernel finds */
         for (r = 0; r < 3000; ++r) {
@@ -265,19 +715,23 @@ static void test_bounds_and_traversal(void)
             int brute = 0, got = hairobb_intersect1(bvh, &ray, &hit);
             hairobb__ray_setup(&rs, &ray);
             for (p = 0; p < n; ++p) brute |= hairobb__intersect_segment(bvh, &rs, p, 0);
-            if (brute != got || (got && (hit.prim_id != rs.hit_prim || hit.t != rs.tfar))) ++mismatches;
+            if (brute != got || (got && (hit.t != rs.tfar || (hit.prim_id != rs.hit_prim && !hits_at(bvh, &ray, hit.prim_id, hit.t, n)))))
+                ++mismatches;
             if (hairobb_occluded1(bvh, &ray) != got) ++occluded_mismatches;
             if (got && !(hit.t >= ray.tnear && hit.u >= 0.0f && hit.u <= 1.0f && hit.v >= -1.0f && hit.v <= 1.0f)) ++mismatches;
             if (!got && hit.prim_id != HAIROBB_INVALID_ID) ++mismatches;
             hits += got;
         }
-        CHECK(hits > 300, "%s: only %ld of 3000 rays hit", policy_name[policy], hits);
-        CHECK(mismatches == 0, "%s: %ld rays where BVH and brute force differ", policy_name[policy], mismatches);
-        CHECK(occluded_mismatches == 0, "%s: %ld rays where occluded1 and intersect1 disagree", policy_name[policy], occluded_mismatches);
+        CHECK(hits > 300, "%s: only %ld of 3000 rays hit", name, hits);
+        CHECK(mismatches == 0, "%s: %ld rays where BVH and brute force differ", name, mismatches);
+        CHECK(occluded_mismatches == 0, "%s: %ld rays where occluded1 and intersect1 disagree", name, occluded_mismatches);
         hairobb_free(bvh);
+        printf("%s: checked in %.2f s\n", name, ((double)clock() - t0) / CLOCKS_PER_SEC);
     }
-    free(vertices);
-    free(indices);
+    free(vertices[0]);
+    free(indices[0]);
+    free(vertices[1]);
+    free(indices[1]);
 }
 
 /* Hit attributes against the reference on single segments. */
@@ -518,8 +972,25 @@ static void test_bad_input(void)
     opt.nodes = (hairobb_node_policy)7;
     CHECK(hairobb_build(vertices, 32, indices, n, &opt, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT, "bad node policy");
     memset(&opt, 0, sizeof opt);
-    opt.obb_layout = (hairobb_obb_layout)2;
-    CHECK(hairobb_build(vertices, 32, indices, n, &opt, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT, "bad OBB layout");
+    opt.obb_layout = (hairobb_obb_layout)9;
+    CHECK(hairobb_build(vertices, 32, indices, n, &opt, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT && bvh == NULL, "bad OBB layout");
+    memset(&opt, 0, sizeof opt);
+    opt.spatial_splits = (hairobb_switch)7;
+    CHECK(hairobb_build(vertices, 32, indices, n, &opt, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT && bvh == NULL, "bad spatial_splits");
+    memset(&opt, 0, sizeof opt);
+    opt.clustering = (hairobb_switch)7;
+    CHECK(hairobb_build(vertices, 32, indices, n, &opt, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT && bvh == NULL, "bad clustering");
+    {
+        static const float bad_budgets[] = {-1.0f, NAN, 5.0f};
+        int i;
+        for (i = 0; i < 3; ++i) {
+            memset(&opt, 0, sizeof opt);
+            opt.spatial_splits = HAIROBB_ON;
+            opt.spatial_split_budget = bad_budgets[i];
+            CHECK(hairobb_build(vertices, 32, indices, n, &opt, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT && bvh == NULL,
+                  "spatial_split_budget %g", (double)bad_budgets[i]);
+        }
+    }
     memset(&opt, 0, sizeof opt);
     opt.curve_pieces = 17;
     CHECK(hairobb_build(vertices, 32, indices, n, &opt, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT, "17 pieces");
@@ -532,44 +1003,168 @@ static void test_bad_input(void)
     free(indices);
 }
 
+/* Progress callback for the allocation tests: counts calls; cancels at
+   the first call (when = 0), at the first fraction of at least 1/2 (1) or
+   at the first fraction of 1 (2; the closing call has 1), or never (-1).
+   How many calls a build makes may depend on its threads; these three
+   come in every build. */
+typedef struct cancel_log {
+    int when, calls, cancelled_at;   /* cancelled_at: the call that cancelled, -1 */
+    int monotone;
+    float last;
+} cancel_log;
+
+static void cancel_log_init(cancel_log *log, int when)
+{
+    memset(log, 0, sizeof *log);
+    log->when = when;
+    log->cancelled_at = -1;
+    log->monotone = 1;
+}
+
+static int cancel_progress(void *user, float fraction)
+{
+    cancel_log *log = (cancel_log *)user;
+    int cancel = log->when == 0 || (log->when == 1 && fraction >= 0.5f) || (log->when == 2 && fraction == 1.0f);
+    if (log->calls > 0 && !(fraction >= log->last)) log->monotone = 0;
+    log->last = fraction;
+    if (cancel && log->cancelled_at < 0) log->cancelled_at = log->calls;
+    ++log->calls;
+    return cancel;
+}
+
+/* Every allocation of a build failing in turn gives OUT_OF_MEMORY, no BVH
+   and no leak: default options, spatial splits (on a scene they clip) and
+   clustering. Cancelling from the progress callback at the first, a middle
+   and the closing call gives CANCELLED, no BVH, no leak and no call after
+   the cancelling one; with both a cancel and a failing allocation, the
+   result is that of the one that came (either, if both did). */
 static void test_allocation_failure(void)
 {
-    float *vertices;
-    uint32_t *indices;
-    size_t n = 3000;
-    long fail_at, allocations;
-    int failures_right = 1;
-    test_allocator counter = {0, -1, 0};
-    hairobb_build_options opt;
-    hairobb_bvh *bvh;
-    make_scene(n, &vertices, &indices);
-    memset(&opt, 0, sizeof opt);
-    opt.allocator_user = &counter;
-    CHECK(hairobb_build(vertices, 4 * n, indices, n, &opt, &bvh) == HAIROBB_OK, "counting build");
-    allocations = counter.calls;
-    hairobb_free(bvh);
-    CHECK(counter.live == 0, "%ld allocations live after free", counter.live);
-    CHECK(allocations >= 4, "only %ld allocations", allocations);
-    for (fail_at = 0; fail_at < allocations; ++fail_at) {
-        test_allocator a = {0, 0, 0};
-        hairobb_result r;
-        a.fail_at = fail_at;
-        opt.allocator_user = &a;
-        r = hairobb_build(vertices, 4 * n, indices, n, &opt, &bvh);
-        if (r != HAIROBB_ERROR_OUT_OF_MEMORY || bvh != NULL || a.live != 0) {
-            failures_right = 0;
-            printf("allocation %ld failing: result %d, %ld live\n", fail_at, (int)r, a.live);
+    static const struct {
+        const char *name;
+        int scene;
+        hairobb_obb_layout layout;
+        hairobb_switch spatial, clustering;
+    } configs[] = {
+        {"default options", 0, HAIROBB_OBB_DEFAULT, HAIROBB_AUTO, HAIROBB_AUTO},
+        {"spatial splits", 1, HAIROBB_OBB_COMPRESSED, HAIROBB_ON, HAIROBB_OFF},
+        {"spatial splits and clustering, per-child OBBs", 1, HAIROBB_OBB_PER_CHILD, HAIROBB_ON, HAIROBB_ON},
+    };
+    static const char *when_names[] = {"the first call", "the first call past 1/2", "the call with 1"};
+    float *vertices[2];
+    uint32_t *indices[2];
+    size_t counts[2] = {3000, 1500};
+    int c;
+    make_scene(counts[0], &vertices[0], &indices[0]);
+    make_crossed_scene(counts[1], &vertices[1], &indices[1]);
+    for (c = 0; c < 3; ++c) {
+        const char *name = configs[c].name;
+        size_t n = counts[configs[c].scene];
+        const float *v = vertices[configs[c].scene];
+        const uint32_t *ix = indices[configs[c].scene];
+        long fail_at, allocations;
+        int failures_right = 1, both_right = 1, when;
+        test_allocator counter;
+        hairobb_build_options opt;
+        hairobb_bvh *bvh;
+        hairobb_stats stats;
+        cancel_log log;
+        memset(&counter, 0, sizeof counter);
+        counter.fail_at = -1;
+        memset(&opt, 0, sizeof opt);
+        opt.obb_layout = configs[c].layout;
+        opt.spatial_splits = configs[c].spatial;
+        opt.spatial_split_budget = 1.0f;
+        opt.clustering = configs[c].clustering;
+        opt.allocator_user = &counter;
+        CHECK(hairobb_build(v, 4 * n, ix, n, &opt, &bvh) == HAIROBB_OK, "%s: counting build", name);
+        allocations = counter.calls;
+        hairobb_get_stats(bvh, &stats);
+        hairobb_free(bvh);
+        CHECK(counter.live == 0 && counter.bad_frees == 0, "%s: %ld allocations live after free, %ld bad frees", name, counter.live,
+              counter.bad_frees);
+        CHECK(allocations >= 4, "%s: only %ld allocations", name, allocations);
+        CHECK(configs[c].spatial != HAIROBB_ON || configs[c].clustering == HAIROBB_ON || stats.leaf_references > n,
+              "%s: nothing clipped (%zu references for %zu segments)", name, stats.leaf_references, n);
+        for (fail_at = 0; fail_at < allocations; ++fail_at) {
+            test_allocator a;
+            hairobb_result r;
+            memset(&a, 0, sizeof a);
+            a.fail_at = fail_at;
+            opt.allocator_user = &a;
+            bvh = (hairobb_bvh *)&a;
+            r = hairobb_build(v, 4 * n, ix, n, &opt, &bvh);
+            if (r != HAIROBB_ERROR_OUT_OF_MEMORY || !a.failed || bvh != NULL || a.live != 0 || a.bad_frees != 0) {
+                failures_right = 0;
+                printf("%s: allocation %ld failing: result %d, %ld live, %ld frees of memory not allocated\n", name, fail_at, (int)r,
+                       a.live, a.bad_frees);
+            }
+            if (r == HAIROBB_OK) hairobb_free(bvh);
         }
+        CHECK(failures_right, "%s: each of %ld failing allocations gives OUT_OF_MEMORY, no BVH and no leak", name, allocations);
+
+        /* cancelling */
+        opt.progress = cancel_progress;
+        opt.progress_user = &log;
+        for (when = -1; when < 3; ++when) {
+            test_allocator a;
+            hairobb_result r;
+            memset(&a, 0, sizeof a);
+            a.fail_at = -1;
+            cancel_log_init(&log, when);
+            opt.allocator_user = &a;
+            bvh = (hairobb_bvh *)&a;
+            r = hairobb_build(v, 4 * n, ix, n, &opt, &bvh);
+            if (when < 0) {
+                CHECK(r == HAIROBB_OK && bvh != NULL && log.calls >= 1 && log.last == 1.0f && log.monotone,
+                      "%s: a build with a progress callback: %s, %d calls, last %g", name, hairobb_result_string(r), log.calls,
+                      (double)log.last);
+                if (r == HAIROBB_OK) hairobb_free(bvh);
+            } else {
+                CHECK(r == HAIROBB_ERROR_CANCELLED && bvh == NULL && log.cancelled_at + 1 == log.calls,
+                      "%s: cancel at %s: %s, %d calls, cancelled at call %d", name, when_names[when], hairobb_result_string(r),
+                      log.calls, log.cancelled_at);
+                if (r == HAIROBB_OK) hairobb_free(bvh);
+            }
+            CHECK(a.live == 0 && a.bad_frees == 0, "%s: cancel at %s: %ld allocations leaked, %ld bad frees", name,
+                  when < 0 ? "no call" : when_names[when], a.live, a.bad_frees);
+        }
+
+        /* a cancel at the first call past 1/2 and each allocation failing in turn */
+        for (fail_at = 0; fail_at < allocations; ++fail_at) {
+            test_allocator f;
+            hairobb_result r;
+            int cancelled;
+            memset(&f, 0, sizeof f);
+            f.fail_at = fail_at;
+            cancel_log_init(&log, 1);
+            opt.allocator_user = &f;
+            bvh = (hairobb_bvh *)&f;
+            r = hairobb_build(v, 4 * n, ix, n, &opt, &bvh);
+            cancelled = log.cancelled_at >= 0;
+            if (!(f.failed || cancelled) || (f.failed && !cancelled && r != HAIROBB_ERROR_OUT_OF_MEMORY) ||
+                (cancelled && !f.failed && r != HAIROBB_ERROR_CANCELLED) ||
+                (r != HAIROBB_ERROR_OUT_OF_MEMORY && r != HAIROBB_ERROR_CANCELLED) || bvh != NULL || f.live != 0 || f.bad_frees != 0) {
+                both_right = 0;
+                printf("%s: allocation %ld failing (%s), cancel past 1/2 (%s): result %d, %ld live, %ld bad frees\n", name, fail_at,
+                       f.failed ? "came" : "did not come", cancelled ? "came" : "did not come", (int)r, f.live, f.bad_frees);
+            }
+            if (r == HAIROBB_OK) hairobb_free(bvh);
+        }
+        CHECK(both_right, "%s: a failing allocation and a cancel: the result of the one that came, no BVH, no leak", name);
     }
-    CHECK(failures_right, "each of %ld failing allocations gives OUT_OF_MEMORY, no BVH and no leak", allocations);
-    free(vertices);
-    free(indices);
+    free(vertices[0]);
+    free(indices[0]);
+    free(vertices[1]);
+    free(indices[1]);
 }
 
 int main(void)
 {
     test_frames();
     test_hair_space();
+    test_clipped_parts();
     test_bounds_and_traversal();
     test_hit_attributes();
     test_roots_hidden_in_one_piece();
