@@ -1185,11 +1185,19 @@ HAIROBB_DEF void hairobb_bounds(const hairobb_bvh *bvh, float lower[3], float up
 /* ------------------------------------------------------------------------ */
 /* Traversal                                                                 */
 /* ------------------------------------------------------------------------ */
+#if defined(__GNUC__) || defined(__clang__)
+#define HAIROBB__INLINE static inline __attribute__((always_inline))
+#else
+#define HAIROBB__INLINE static inline
+#endif
+
 /* A ray prepared for slab tests against boxes in one frame. */
 typedef struct hairobb__slab_ray {
     float org[3];
     float rdir[3];              /* 1/dir, finite */
-    int near_is_upper[3];       /* rdir < 0: enter through the upper plane */
+    /* floats from a node's lower[0] to the plane entered (near) and left
+       (far) on each axis: the upper plane is entered where rdir < 0 */
+    int near_plane[3], far_plane[3];
 } hairobb__slab_ray;
 
 /* Everything one ray needs, computed once per ray. */
@@ -1215,9 +1223,12 @@ static void hairobb__slab_setup(hairobb__slab_ray *slab, const float org[3], con
     int k;
     for (k = 0; k < 3; ++k) {
         float d = fabsf(dir[k]) < HAIROBB__TINY_DIR ? (signbit(dir[k]) ? -HAIROBB__TINY_DIR : HAIROBB__TINY_DIR) : dir[k];
+        int upper_first = 0;
         slab->org[k] = org[k];
         slab->rdir[k] = 1.0f / d;
-        slab->near_is_upper[k] = slab->rdir[k] < 0.0f;
+        upper_first = slab->rdir[k] < 0.0f;
+        slab->near_plane[k] = (upper_first ? 3 * HAIROBB__W : 0) + k * HAIROBB__W;
+        slab->far_plane[k] = (upper_first ? 0 : 3 * HAIROBB__W) + k * HAIROBB__W;
     }
 }
 
@@ -1240,23 +1251,22 @@ static int hairobb__ray_setup(hairobb__ray_state *rs, const hairobb_ray *ray)
     return 1;
 }
 
-static hairobb__vn hairobb__far_scale(hairobb__vn tfar)
+HAIROBB__INLINE hairobb__vn hairobb__far_scale(hairobb__vn tfar)
 {
     return hairobb__vn_mul(tfar, hairobb__vn_set1(HAIROBB__FAR_SCALE));
 }
 
-/* Slab test of a node's boxes ([axis][child] arrays) in the slab ray's frame. */
-static int hairobb__intersect_boxes(const float (*lower)[HAIROBB__W], const float (*upper)[HAIROBB__W], const hairobb__slab_ray *slab,
-                                    const hairobb__ray_state *rs, float dist[HAIROBB__W])
+/* Slab test of a node's boxes in the slab ray's frame; planes points at
+   lower[3][W], followed by upper[3][W] ([axis][child] arrays). */
+HAIROBB__INLINE int hairobb__intersect_boxes(const float *planes, const hairobb__slab_ray *slab,
+                                             const hairobb__ray_state *rs, float dist[HAIROBB__W])
 {
     hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
     int k;
     for (k = 0; k < 3; ++k) {
         hairobb__vn o = hairobb__vn_set1(slab->org[k]), r = hairobb__vn_set1(slab->rdir[k]);
-        const float *near_plane = slab->near_is_upper[k] ? upper[k] : lower[k];
-        const float *far_plane = slab->near_is_upper[k] ? lower[k] : upper[k];
-        tn = hairobb__vn_max(hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_load(near_plane), o), r), tn);
-        tf = hairobb__vn_min(hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_load(far_plane), o), r), tf);
+        tn = hairobb__vn_max(hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_load(planes + slab->near_plane[k]), o), r), tn);
+        tf = hairobb__vn_min(hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_load(planes + slab->far_plane[k]), o), r), tf);
     }
     hairobb__vn_store(dist, tn);
     return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
@@ -1274,10 +1284,10 @@ static int hairobb__intersect_rotated_node(const hairobb__rotated_node *node, co
         dir[k] = hairobb__dot3(node->rotation + 3 * k, rs->dir);
     }
     hairobb__slab_setup(&slab, org, dir);
-    return hairobb__intersect_boxes(node->lower, node->upper, &slab, rs, dist);
+    return hairobb__intersect_boxes(node->lower[0], &slab, rs, dist);
 }
 
-static int hairobb__intersect_obb_node(const hairobb__obb_node *node, const hairobb__ray_state *rs, float dist[HAIROBB__W])
+HAIROBB__INLINE int hairobb__intersect_obb_node(const hairobb__obb_node *node, const hairobb__ray_state *rs, float dist[HAIROBB__W])
 {
     hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
     hairobb__vn one = hairobb__vn_set1(1.0f);
@@ -1302,67 +1312,70 @@ static int hairobb__intersect_obb_node(const hairobb__obb_node *node, const hair
 
 static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint64_t ref, int any_hit);
 
-/* Nearest-first traversal; any_hit stops at the first hit. */
+/* Nearest-first traversal; any_hit stops at the first hit. A node with
+   several hit children pushes them all, sorted so that the nearest is on
+   top, and goes on with that one. */
 static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int any_hit)
 {
     uint64_t stack_ref[HAIROBB__STACK];
     float stack_dist[HAIROBB__STACK];
     int sp = 0, found = 0;
-    stack_ref[sp] = bvh->root;
-    stack_dist[sp] = rs->tnear;
-    ++sp;
-    while (sp > 0) {
-        uint64_t ref;
-        --sp;
-        ref = stack_ref[sp];
-        if (stack_dist[sp] > rs->tfar) continue;
-        while (HAIROBB__REF_TYPE(ref) != HAIROBB__REF_LEAF && HAIROBB__REF_TYPE(ref) != HAIROBB__REF_EMPTY) {
+    uint64_t ref = bvh->root;
+    for (;;) {
+        unsigned type = HAIROBB__REF_TYPE(ref);
+        if (type != HAIROBB__REF_LEAF && type != HAIROBB__REF_EMPTY) {
             const void *node = bvh->nodes + (ref & ~(uint64_t)15);
             const uint64_t *child;
             float dist[HAIROBB__W];
-            int bits, i, hits = 0;
-            uint64_t hit_ref[HAIROBB__W];
-            float hit_dist[HAIROBB__W];
-            if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_AABB) {
+            int bits, i;
+            if (type == HAIROBB__REF_AABB) {
                 const hairobb__aabb_node *aabb = HAIROBB__CAST(const hairobb__aabb_node *, node);
-                bits = hairobb__intersect_boxes(aabb->lower, aabb->upper, &rs->world, rs, dist);
+                bits = hairobb__intersect_boxes(aabb->lower[0], &rs->world, rs, dist);
                 child = aabb->child;
-            } else if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_ROTATED) {
+            } else if (type == HAIROBB__REF_ROTATED) {
                 bits = hairobb__intersect_rotated_node(HAIROBB__CAST(const hairobb__rotated_node *, node), rs, dist);
                 child = HAIROBB__CAST(const hairobb__rotated_node *, node)->child;
             } else {
                 bits = hairobb__intersect_obb_node(HAIROBB__CAST(const hairobb__obb_node *, node), rs, dist);
                 child = HAIROBB__CAST(const hairobb__obb_node *, node)->child;
             }
-            if (!bits) { ref = HAIROBB__REF_EMPTY; break; }
-            i = hairobb__lowest_bit((unsigned)bits);
-            if (!(bits & (bits - 1))) { ref = child[i]; continue; }   /* one hit: the common case */
-            /* insertion sort of the hit children, nearest last */
-            while (bits) {
-                int j = hairobb__lowest_bit((unsigned)bits);
+            if (bits) {
+                int base = sp;
+                i = hairobb__lowest_bit((unsigned)bits);
                 bits &= bits - 1;
-                for (i = hits; i > 0 && hit_dist[i - 1] < dist[j]; --i) {
-                    hit_ref[i] = hit_ref[i - 1];
-                    hit_dist[i] = hit_dist[i - 1];
-                }
-                hit_ref[i] = child[j];
-                hit_dist[i] = dist[j];
-                ++hits;
-            }
-            for (i = 0; i < hits - 1; ++i) {
-                stack_ref[sp] = hit_ref[i];
-                stack_dist[sp] = hit_dist[i];
+                if (!bits) { ref = child[i]; continue; }   /* one hit: the common case */
+                /* insertion sort onto the stack, nearest on top; equal
+                   distances keep child order */
+                stack_ref[sp] = child[i];
+                stack_dist[sp] = dist[i];
                 ++sp;
+                do {
+                    int j = hairobb__lowest_bit((unsigned)bits);
+                    float d = dist[j];
+                    bits &= bits - 1;
+                    for (i = sp; i > base && stack_dist[i - 1] < d; --i) {
+                        stack_ref[i] = stack_ref[i - 1];
+                        stack_dist[i] = stack_dist[i - 1];
+                    }
+                    stack_ref[i] = child[j];
+                    stack_dist[i] = d;
+                    ++sp;
+                } while (bits);
+                ref = stack_ref[--sp];
+                continue;
             }
-            ref = hit_ref[hits - 1];
+        } else if (type == HAIROBB__REF_LEAF) {
+            if (hairobb__intersect_leaf(bvh, rs, ref, any_hit)) {
+                found = 1;
+                if (any_hit) return 1;
+            }
         }
-        if (HAIROBB__REF_TYPE(ref) != HAIROBB__REF_LEAF) continue;
-        if (hairobb__intersect_leaf(bvh, rs, ref, any_hit)) {
-            found = 1;
-            if (any_hit) return 1;
-        }
+        do {
+            if (sp == 0) return found;
+            --sp;
+        } while (stack_dist[sp] > rs->tfar);
+        ref = stack_ref[sp];
     }
-    return found;
 }
 
 /* ------------------------------------------------------------------------ */
