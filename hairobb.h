@@ -380,6 +380,14 @@ static inline hairobb__v4 hairobb__v4_min(hairobb__v4 a, hairobb__v4 b) { return
 static inline hairobb__v4 hairobb__v4_max(hairobb__v4 a, hairobb__v4 b) { return _mm_max_ps(a, b); }
 static inline int hairobb__v4_le_bits(hairobb__v4 a, hairobb__v4 b) { return _mm_movemask_ps(_mm_cmple_ps(a, b)); }
 static inline void hairobb__v4_store(float *p, hairobb__v4 a) { _mm_storeu_ps(p, a); }
+/* Rows a..d become columns (moves only). */
+static inline void hairobb__v4_transpose(hairobb__v4 *a, hairobb__v4 *b, hairobb__v4 *c, hairobb__v4 *d) { _MM_TRANSPOSE4_PS(*a, *b, *c, *d); }
+/* max(max(a0, a2), max(a1, a3)) with max's NaN rule. */
+static inline float hairobb__v4_hmax(hairobb__v4 a)
+{
+    __m128 t = _mm_max_ps(a, _mm_movehl_ps(a, a));
+    return _mm_cvtss_f32(_mm_max_ss(t, _mm_shuffle_ps(t, t, 1)));
+}
 /* x, or +-tiny where |x| < tiny: keeps 1/x finite for directions parallel to a slab. */
 static inline hairobb__v4 hairobb__v4_nonzero(hairobb__v4 x, float tiny)
 {
@@ -411,6 +419,20 @@ static inline int hairobb__v4_le_bits(hairobb__v4 a, hairobb__v4 b)
     return bits;
 }
 static inline void hairobb__v4_store(float *p, hairobb__v4 a) { memcpy(p, a.f, sizeof a.f); }
+static inline void hairobb__v4_transpose(hairobb__v4 *a, hairobb__v4 *b, hairobb__v4 *c, hairobb__v4 *d)
+{
+    hairobb__v4 *rows[4];
+    float m[4][4];
+    int i, j;
+    rows[0] = a; rows[1] = b; rows[2] = c; rows[3] = d;
+    for (i = 0; i < 4; ++i) for (j = 0; j < 4; ++j) m[i][j] = rows[j]->f[i];
+    for (i = 0; i < 4; ++i) memcpy(rows[i]->f, m[i], sizeof m[i]);
+}
+static inline float hairobb__v4_hmax(hairobb__v4 a)
+{
+    float t0 = a.f[0] > a.f[2] ? a.f[0] : a.f[2], t1 = a.f[1] > a.f[3] ? a.f[1] : a.f[3];
+    return t0 > t1 ? t0 : t1;
+}
 #endif
 
 #if HAIROBB__AVX
@@ -1386,19 +1408,34 @@ typedef struct hairobb__ray_curve {
     float x[4], y[4], z[4], r[4];
 } hairobb__ray_curve;
 
+/* Also returns x, y, z, r as vectors, lane i = control point i. */
+HAIROBB__INLINE void hairobb__to_ray_space_v4(const hairobb__ray_state *rs, const float *cp, hairobb__ray_curve *c,
+                                              hairobb__v4 *x, hairobb__v4 *y, hairobb__v4 *z, hairobb__v4 *r)
+{
+    hairobb__v4 p0 = hairobb__v4_load(cp), p1 = hairobb__v4_load(cp + 4);
+    hairobb__v4 p2 = hairobb__v4_load(cp + 8), p3 = hairobb__v4_load(cp + 12);
+    hairobb__v4 qx, qy, qz;
+    hairobb__v4_transpose(&p0, &p1, &p2, &p3);
+    qx = hairobb__v4_sub(p0, hairobb__v4_set1(rs->org[0]));
+    qy = hairobb__v4_sub(p1, hairobb__v4_set1(rs->org[1]));
+    qz = hairobb__v4_sub(p2, hairobb__v4_set1(rs->org[2]));
+#define HAIROBB__ROW(f) hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1((f)[0]), qx), \
+        hairobb__v4_mul(hairobb__v4_set1((f)[1]), qy)), hairobb__v4_mul(hairobb__v4_set1((f)[2]), qz))
+    *x = HAIROBB__ROW(rs->frame);
+    *y = HAIROBB__ROW(rs->frame + 3);
+    *z = HAIROBB__ROW(rs->frame + 6);
+#undef HAIROBB__ROW
+    *r = p3;
+    hairobb__v4_store(c->x, *x);
+    hairobb__v4_store(c->y, *y);
+    hairobb__v4_store(c->z, *z);
+    hairobb__v4_store(c->r, *r);
+}
+
 static void hairobb__to_ray_space(const hairobb__ray_state *rs, const float *cp, hairobb__ray_curve *c)
 {
-    int i;
-    for (i = 0; i < 4; ++i) {
-        float q[3];
-        q[0] = cp[4 * i] - rs->org[0];
-        q[1] = cp[4 * i + 1] - rs->org[1];
-        q[2] = cp[4 * i + 2] - rs->org[2];
-        c->x[i] = hairobb__dot3(rs->frame, q);
-        c->y[i] = hairobb__dot3(rs->frame + 3, q);
-        c->z[i] = hairobb__dot3(rs->frame + 6, q);
-        c->r[i] = cp[4 * i + 3];
-    }
+    hairobb__v4 x, y, z, r;
+    hairobb__to_ray_space_v4(rs, cp, c, &x, &y, &z, &r);
 }
 
 /* The same curve in power form, a[0] + a[1] u + a[2] u^2 + a[3] u^3: the
@@ -1615,18 +1652,21 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
 static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint32_t prim, int any_hit)
 {
     hairobb__ray_curve c;
-    float max_r, min_x, max_x, min_y, max_y, min_z, max_z;
-    int i;
-    hairobb__to_ray_space(rs, bvh->vertices + 4 * (size_t)bvh->indices[prim], &c);
-    max_r = hairobb__maxf(hairobb__maxf(c.r[0], c.r[1]), hairobb__maxf(c.r[2], c.r[3]));
-    min_x = max_x = c.x[0]; min_y = max_y = c.y[0]; min_z = max_z = c.z[0];
-    for (i = 1; i < 4; ++i) {
-        min_x = hairobb__minf(min_x, c.x[i]); max_x = hairobb__maxf(max_x, c.x[i]);
-        min_y = hairobb__minf(min_y, c.y[i]); max_y = hairobb__maxf(max_y, c.y[i]);
-        min_z = hairobb__minf(min_z, c.z[i]); max_z = hairobb__maxf(max_z, c.z[i]);
-    }
-    if (min_x > max_r || max_x < -max_r || min_y > max_r || max_y < -max_r) return 0;
-    if (max_z < rs->tnear * rs->dir_length || min_z > rs->tfar * rs->dir_length) return 0;
+    hairobb__v4 x, y, z, r, reach, neg_reach;
+    float max_r;
+    int inside;
+    hairobb__to_ray_space_v4(rs, bvh->vertices + 4 * (size_t)bvh->indices[prim], &c, &x, &y, &z, &r);
+    max_r = hairobb__v4_hmax(r);
+    reach = hairobb__v4_set1(max_r);
+    neg_reach = hairobb__v4_set1(-max_r);
+    /* some control point on the near side of each of the four lines
+       x, y = +-max_r, and of the planes z = tnear, tfar (times |dir|): each
+       4-bit mask is nonzero, that is, has bit 4 set once 15 is added */
+    inside = (hairobb__v4_le_bits(x, reach) + 15) & (hairobb__v4_le_bits(neg_reach, x) + 15) &
+             (hairobb__v4_le_bits(y, reach) + 15) & (hairobb__v4_le_bits(neg_reach, y) + 15) &
+             (hairobb__v4_le_bits(hairobb__v4_set1(rs->tnear * rs->dir_length), z) + 15) &
+             (hairobb__v4_le_bits(z, hairobb__v4_set1(rs->tfar * rs->dir_length)) + 15) & 16;
+    if (!inside) return 0;
     return hairobb__intersect_curve(bvh, rs, &c, prim, any_hit);
 }
 
