@@ -380,6 +380,7 @@ static inline hairobb__v4 hairobb__v4_min(hairobb__v4 a, hairobb__v4 b) { return
 static inline hairobb__v4 hairobb__v4_max(hairobb__v4 a, hairobb__v4 b) { return _mm_max_ps(a, b); }
 static inline int hairobb__v4_le_bits(hairobb__v4 a, hairobb__v4 b) { return _mm_movemask_ps(_mm_cmple_ps(a, b)); }
 static inline void hairobb__v4_store(float *p, hairobb__v4 a) { _mm_storeu_ps(p, a); }
+static inline hairobb__v4 hairobb__v4_abs(hairobb__v4 a) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), a); }
 /* Rows a..d become columns (moves only). */
 static inline void hairobb__v4_transpose(hairobb__v4 *a, hairobb__v4 *b, hairobb__v4 *c, hairobb__v4 *d) { _MM_TRANSPOSE4_PS(*a, *b, *c, *d); }
 /* max(max(a0, a2), max(a1, a3)) with max's NaN rule. */
@@ -419,6 +420,13 @@ static inline int hairobb__v4_le_bits(hairobb__v4 a, hairobb__v4 b)
     return bits;
 }
 static inline void hairobb__v4_store(float *p, hairobb__v4 a) { memcpy(p, a.f, sizeof a.f); }
+static inline hairobb__v4 hairobb__v4_abs(hairobb__v4 a)
+{
+    hairobb__v4 r;
+    int i;
+    for (i = 0; i < 4; ++i) r.f[i] = fabsf(a.f[i]);
+    return r;
+}
 static inline void hairobb__v4_transpose(hairobb__v4 *a, hairobb__v4 *b, hairobb__v4 *c, hairobb__v4 *d)
 {
     hairobb__v4 *rows[4];
@@ -1571,25 +1579,25 @@ static int hairobb__piece_hit(hairobb__ray_state *rs, const hairobb__ray_curve *
    h^2/8 max|P''| and |P''| <= 6 max|second difference|: widening the chord
    test by that (and the same for r), plus rounding of the evaluated points,
    misses no root of the ribbon. */
-static float hairobb__chord_pad(const hairobb__ray_curve *c, int pieces)
+static float hairobb__chord_pad(const hairobb__ray_curve *c, int pieces, float magnitude)
 {
-    float bend = 0.0f, bend_r = 0.0f, magnitude = 0.0f;
+    float bend = 0.0f, bend_r = 0.0f;
     int i;
     for (i = 0; i < 2; ++i) {
         float ddx = c->x[i] - 2.0f * c->x[i + 1] + c->x[i + 2], ddy = c->y[i] - 2.0f * c->y[i + 1] + c->y[i + 2];
         bend = hairobb__maxf(bend, sqrtf(ddx * ddx + ddy * ddy));
         bend_r = hairobb__maxf(bend_r, fabsf(c->r[i] - 2.0f * c->r[i + 1] + c->r[i + 2]));
     }
-    for (i = 0; i < 4; ++i) magnitude = hairobb__maxf(magnitude, hairobb__maxf(fabsf(c->x[i]), fabsf(c->y[i])));
     return (bend + bend_r) * (0.75f / (float)(pieces * pieces)) + magnitude * (8.0f * FLT_EPSILON);
 }
 
+/* magnitude: the largest |x|, |y| of the control points */
 static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *rs, const hairobb__ray_curve *c,
-                                    uint32_t prim, int any_hit)
+                                    float magnitude, uint32_t prim, int any_hit)
 {
     hairobb__ray_poly poly;
     int have_poly = 0, chunk, found = 0;
-    float pad = bvh->precision == HAIROBB_PRECISION_PIECES ? 0.0f : hairobb__chord_pad(c, bvh->pieces);
+    float pad = bvh->precision == HAIROBB_PRECISION_PIECES ? 0.0f : hairobb__chord_pad(c, bvh->pieces, magnitude);
 
     for (chunk = 0; chunk < bvh->piece_chunks; ++chunk) {
         const float (*w)[4][8] = bvh->piece_weights[chunk];
@@ -1653,7 +1661,7 @@ static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state
 {
     hairobb__ray_curve c;
     hairobb__v4 x, y, z, r, reach, neg_reach;
-    float max_r;
+    float max_r, magnitude;
     int inside;
     hairobb__to_ray_space_v4(rs, bvh->vertices + 4 * (size_t)bvh->indices[prim], &c, &x, &y, &z, &r);
     max_r = hairobb__v4_hmax(r);
@@ -1667,7 +1675,19 @@ static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state
              (hairobb__v4_le_bits(hairobb__v4_set1(rs->tnear * rs->dir_length), z) + 15) &
              (hairobb__v4_le_bits(z, hairobb__v4_set1(rs->tfar * rs->dir_length)) + 15) & 16;
     if (!inside) return 0;
-    return hairobb__intersect_curve(bvh, rs, &c, prim, any_hit);
+    /* The same for the two lines parallel to the chord P0 P3 at distance
+       max_r, widened by the rounding of the curve's points as the exact test
+       evaluates them: |n.P2(u)| <= |n| |P2(u)| <= |n| r(u) on the ribbon,
+       and n.P2(u) lies between the extreme n.Pi. */
+    {
+        float nx = c.y[0] - c.y[3], ny = c.x[3] - c.x[0], limit;
+        hairobb__v4 d;
+        magnitude = hairobb__v4_hmax(hairobb__v4_max(hairobb__v4_abs(x), hairobb__v4_abs(y)));
+        limit = sqrtf(nx * nx + ny * ny) * (max_r + magnitude * (16.0f * FLT_EPSILON));
+        d = hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(nx), x), hairobb__v4_mul(hairobb__v4_set1(ny), y));
+        if (!hairobb__v4_le_bits(d, hairobb__v4_set1(limit)) || !hairobb__v4_le_bits(hairobb__v4_set1(-limit), d)) return 0;
+    }
+    return hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit);
 }
 
 static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint64_t ref, int any_hit)
