@@ -1440,12 +1440,6 @@ HAIROBB__INLINE void hairobb__to_ray_space_v4(const hairobb__ray_state *rs, cons
     hairobb__v4_store(c->r, *r);
 }
 
-static void hairobb__to_ray_space(const hairobb__ray_state *rs, const float *cp, hairobb__ray_curve *c)
-{
-    hairobb__v4 x, y, z, r;
-    hairobb__to_ray_space_v4(rs, cp, c, &x, &y, &z, &r);
-}
-
 /* The same curve in power form, a[0] + a[1] u + a[2] u^2 + a[3] u^3: the
    root finder evaluates it many times, Horner's rule makes that cheap. */
 typedef struct hairobb__ray_poly {
@@ -1703,22 +1697,43 @@ static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *r
     return found;
 }
 
+/* hairobb__bezier's value and first derivative for 4 curves at once, one
+   per lane, rounded as it rounds: rows p0..p3 hold the control points. */
+static void hairobb__bezier_v4(hairobb__v4 p0, hairobb__v4 p1, hairobb__v4 p2, hairobb__v4 p3, float u,
+                               hairobb__v4 *value, hairobb__v4 *d1)
+{
+    float s = 1.0f - u;
+    hairobb__v4 e0 = hairobb__v4_sub(p1, p0), e1 = hairobb__v4_sub(p2, p1), e2 = hairobb__v4_sub(p3, p2);
+    *d1 = hairobb__v4_mul(hairobb__v4_set1(3.0f),
+                          hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(s * s), e0),
+                                                          hairobb__v4_mul(hairobb__v4_set1(2.0f * u * s), e1)),
+                                          hairobb__v4_mul(hairobb__v4_set1(u * u), e2)));
+    *value = hairobb__v4_add(hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(s * s * s), p0),
+                                                             hairobb__v4_mul(hairobb__v4_set1(3.0f * u * s * s), p1)),
+                                             hairobb__v4_mul(hairobb__v4_set1(3.0f * u * u * s), p2)),
+                             hairobb__v4_mul(hairobb__v4_set1(u * u * u), p3));
+}
+
 /* Hit attributes, computed once for the final hit only. */
 static void hairobb__fill_hit(const hairobb_bvh *bvh, const hairobb__ray_state *rs, hairobb_hit *hit)
 {
     const float *cp = bvh->vertices + 4 * (size_t)bvh->indices[rs->hit_prim];
     hairobb__ray_curve c;
-    float u = rs->hit_u, world[4], tangent_xy[2], x, y, r, tlen2, along, n[3], nlen;
+    hairobb__v4 x4, y4, z4, r4, value, d1;
+    float u = rs->hit_u, at[4], tangent_at[4], tangent_xy[2], x, y, r, tlen2, along, n[3], nlen;
     const float *unit_dir = rs->frame + 6;
-    int k, i;
-    hairobb__to_ray_space(rs, cp, &c);
-    for (k = 0; k < 3; ++k) {
-        for (i = 0; i < 4; ++i) world[i] = cp[4 * i + k];
-        hairobb__bezier(world, u, &hit->tangent[k], NULL);
-    }
-    x = hairobb__bezier(c.x, u, &tangent_xy[0], NULL);
-    y = hairobb__bezier(c.y, u, &tangent_xy[1], NULL);
-    r = hairobb__bezier(c.r, u, NULL, NULL);
+    int k;
+    hairobb__bezier_v4(hairobb__v4_load(cp), hairobb__v4_load(cp + 4), hairobb__v4_load(cp + 8), hairobb__v4_load(cp + 12),
+                       u, &value, &d1);
+    hairobb__v4_store(tangent_at, d1);
+    for (k = 0; k < 3; ++k) hit->tangent[k] = tangent_at[k];
+    hairobb__to_ray_space_v4(rs, cp, &c, &x4, &y4, &z4, &r4);
+    hairobb__v4_transpose(&x4, &y4, &z4, &r4);     /* rows: control points (x, y, z, r) */
+    hairobb__bezier_v4(x4, y4, z4, r4, u, &value, &d1);
+    hairobb__v4_store(at, value);
+    hairobb__v4_store(tangent_at, d1);
+    x = at[0]; y = at[1]; r = at[3];
+    tangent_xy[0] = tangent_at[0]; tangent_xy[1] = tangent_at[1];
     tlen2 = tangent_xy[0] * tangent_xy[0] + tangent_xy[1] * tangent_xy[1];
     hit->v = 0.0f;
     if (r > 0.0f && tlen2 > 0.0f) {
