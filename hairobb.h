@@ -1317,25 +1317,32 @@ static int hairobb__intersect_rotated_node(const hairobb__rotated_node *node, co
     return hairobb__intersect_boxes(node->lower[0], &slab, rs, dist);
 }
 
+/* Each child's slab pair along a row of its map is [0, 1] in unit space.
+   1/d is clamped to +-1/tiny, which is 1/d with d replaced by +-tiny where
+   |d| < tiny (as hairobb__slab_setup does), in two operations. */
 HAIROBB__INLINE int hairobb__intersect_obb_node(const hairobb__obb_node *node, const hairobb__ray_state *rs, float dist[HAIROBB__W])
 {
     hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
-    hairobb__vn one = hairobb__vn_set1(1.0f);
+    hairobb__vn one = hairobb__vn_set1(1.0f), zero = hairobb__vn_set1(0.0f);
+    hairobb__vn big = hairobb__vn_set1(1.0f / HAIROBB__TINY_DIR), neg_big = hairobb__vn_set1(-(1.0f / HAIROBB__TINY_DIR));
     hairobb__vn ox = hairobb__vn_set1(rs->org[0] - node->centre[0]), oy = hairobb__vn_set1(rs->org[1] - node->centre[1]);
     hairobb__vn oz = hairobb__vn_set1(rs->org[2] - node->centre[2]);
     hairobb__vn dx = hairobb__vn_set1(rs->dir[0]), dy = hairobb__vn_set1(rs->dir[1]), dz = hairobb__vn_set1(rs->dir[2]);
-    int row;
-    for (row = 0; row < 3; ++row) {
-        hairobb__vn m0 = hairobb__vn_load(node->xfm[3 * row]), m1 = hairobb__vn_load(node->xfm[3 * row + 1]);
-        hairobb__vn m2 = hairobb__vn_load(node->xfm[3 * row + 2]), m3 = hairobb__vn_load(node->xfm[9 + row]);
-        hairobb__vn o = hairobb__vn_add(hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, ox), hairobb__vn_mul(m1, oy)), hairobb__vn_mul(m2, oz)), m3);
-        hairobb__vn d = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, dx), hairobb__vn_mul(m1, dy)), hairobb__vn_mul(m2, dz));
-        hairobb__vn r = hairobb__vn_div(one, hairobb__vn_nonzero(d, HAIROBB__TINY_DIR));
-        hairobb__vn t0 = hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_set1(0.0f), o), r);
-        hairobb__vn t1 = hairobb__vn_mul(hairobb__vn_sub(one, o), r);
-        tn = hairobb__vn_max(hairobb__vn_min(t0, t1), tn);
-        tf = hairobb__vn_min(hairobb__vn_max(t0, t1), tf);
-    }
+#define HAIROBB__OBB_ROW(row) do { \
+        hairobb__vn m0 = hairobb__vn_load(node->xfm[3 * (row)]), m1 = hairobb__vn_load(node->xfm[3 * (row) + 1]); \
+        hairobb__vn m2 = hairobb__vn_load(node->xfm[3 * (row) + 2]), m3 = hairobb__vn_load(node->xfm[9 + (row)]); \
+        hairobb__vn o = hairobb__vn_add(hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, ox), hairobb__vn_mul(m1, oy)), hairobb__vn_mul(m2, oz)), m3); \
+        hairobb__vn d = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, dx), hairobb__vn_mul(m1, dy)), hairobb__vn_mul(m2, dz)); \
+        hairobb__vn r = hairobb__vn_min(hairobb__vn_max(hairobb__vn_div(one, d), neg_big), big); \
+        hairobb__vn t0 = hairobb__vn_mul(hairobb__vn_sub(zero, o), r); \
+        hairobb__vn t1 = hairobb__vn_mul(hairobb__vn_sub(one, o), r); \
+        tn = hairobb__vn_max(hairobb__vn_min(t0, t1), tn); \
+        tf = hairobb__vn_min(hairobb__vn_max(t0, t1), tf); \
+    } while (0)
+    HAIROBB__OBB_ROW(0);
+    HAIROBB__OBB_ROW(1);
+    HAIROBB__OBB_ROW(2);
+#undef HAIROBB__OBB_ROW
     hairobb__vn_store(dist, tn);
     return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
 }
