@@ -1523,6 +1523,11 @@ static float hairobb__solve_bracketed(const hairobb__ray_poly *c, float lo, floa
     return u;
 }
 
+static int hairobb__sign_change(float fa, float fb)
+{
+    return (fa <= 0.0f && fb >= 0.0f) || (fa >= 0.0f && fb <= 0.0f);
+}
+
 /* Roots of f in [a, b], each tried as a hit. A sign change brackets one.
    Without one, two roots can hide where f dips through zero; halving the
    interval `depth` times exposes such dips down to a quarter of a piece,
@@ -1532,7 +1537,7 @@ static int hairobb__refine_range(hairobb__ray_state *rs, const hairobb__ray_poly
 {
     float lo = a, hi = b, middle, f_middle, d_middle;
     int found = 0, iteration;
-    if ((fa <= 0.0f && fb >= 0.0f) || (fa >= 0.0f && fb <= 0.0f))
+    if (hairobb__sign_change(fa, fb))
         return hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, a, b, fa, fb));
     if (depth > 0) {
         middle = 0.5f * (a + b);
@@ -1555,11 +1560,53 @@ static int hairobb__refine_range(hairobb__ray_state *rs, const hairobb__ray_poly
     return found;
 }
 
+/* hairobb__ribbon_f and its derivative at 8 parameters at once, rounded as
+   it rounds. */
+static void hairobb__ribbon_f_v8(const hairobb__ray_poly *c, const float u_lanes[8], float f[8], float derivative[8])
+{
+    hairobb__v8 u = hairobb__v8_load(u_lanes), x, y, dx, dy, ddx, ddy;
+#define HAIROBB__HORNER(a, value, d1, d2) \
+    value = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul( \
+        hairobb__v8_set1(a[3]), u), hairobb__v8_set1(a[2])), u), hairobb__v8_set1(a[1])), u), hairobb__v8_set1(a[0])); \
+    d1 = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(hairobb__v8_set1(3.0f * a[3]), u), \
+        hairobb__v8_set1(2.0f * a[2])), u), hairobb__v8_set1(a[1])); \
+    d2 = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_set1(6.0f * a[3]), u), hairobb__v8_set1(2.0f * a[2]))
+    HAIROBB__HORNER(c->x, x, dx, ddx);
+    HAIROBB__HORNER(c->y, y, dy, ddy);
+#undef HAIROBB__HORNER
+    hairobb__v8_store(derivative, hairobb__v8_add(hairobb__v8_add(hairobb__v8_add(hairobb__v8_mul(dx, dx), hairobb__v8_mul(dy, dy)),
+                                                                  hairobb__v8_mul(x, ddx)), hairobb__v8_mul(y, ddy)));
+    hairobb__v8_store(f, hairobb__v8_add(hairobb__v8_mul(x, dx), hairobb__v8_mul(y, dy)));
+}
+
+/* hairobb__refine_range(a, b, ..., depth 2), with f and f' at the ends,
+   the middle and the quarters evaluated at once up front. */
 static int hairobb__refine_piece(hairobb__ray_state *rs, const hairobb__ray_poly *c, uint32_t prim, float a, float b)
 {
-    float da, db;
-    float fa = hairobb__ribbon_f(c, a, &da), fb = hairobb__ribbon_f(c, b, &db);
-    return hairobb__refine_range(rs, c, prim, a, b, fa, fb, da, db, 2);
+    float u[8], f[8], d[8];
+    int found = 0;
+    u[0] = a;
+    u[4] = b;
+    u[2] = 0.5f * (a + b);
+    u[1] = 0.5f * (a + u[2]);
+    u[3] = 0.5f * (u[2] + b);
+    u[5] = u[6] = u[7] = b;
+    hairobb__ribbon_f_v8(c, u, f, d);
+    if (hairobb__sign_change(f[0], f[4]))
+        return hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, a, b, f[0], f[4]));
+    if (hairobb__sign_change(f[0], f[2])) {
+        found |= hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, u[0], u[2], f[0], f[2]));
+    } else {
+        found |= hairobb__refine_range(rs, c, prim, u[0], u[1], f[0], f[1], d[0], d[1], 0);
+        found |= hairobb__refine_range(rs, c, prim, u[1], u[2], f[1], f[2], d[1], d[2], 0);
+    }
+    if (hairobb__sign_change(f[2], f[4])) {
+        found |= hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, u[2], u[4], f[2], f[4]));
+    } else {
+        found |= hairobb__refine_range(rs, c, prim, u[2], u[3], f[2], f[3], d[2], d[3], 0);
+        found |= hairobb__refine_range(rs, c, prim, u[3], u[4], f[3], f[4], d[3], d[4], 0);
+    }
+    return found;
 }
 
 /* The linear piece alone (HAIROBB_PRECISION_PIECES): hit where the closest
