@@ -1381,6 +1381,15 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
                 i = hairobb__lowest_bit((unsigned)bits);
                 bits &= bits - 1;
                 if (!bits) { ref = child[i]; continue; }   /* one hit: the common case */
+                if (!(bits & (bits - 1))) {                 /* two: the farther one waits */
+                    int j = hairobb__lowest_bit((unsigned)bits);
+                    int i_first = dist[i] < dist[j];        /* as the sort below orders them */
+                    stack_ref[sp] = i_first ? child[j] : child[i];
+                    stack_dist[sp] = i_first ? dist[j] : dist[i];
+                    ++sp;
+                    ref = i_first ? child[i] : child[j];
+                    continue;
+                }
                 /* insertion sort onto the stack, nearest on top; equal
                    distances keep child order */
                 stack_ref[sp] = child[i];
