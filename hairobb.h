@@ -1514,7 +1514,9 @@ static int hairobb__try_hit(hairobb__ray_state *rs, const hairobb__ray_poly *c, 
 }
 
 /* Root of f in [lo, hi] where f changes sign: Newton steps, bisection when a
-   step leaves the bracket. */
+   step leaves the bracket. A Newton step of 1e-7 or less ends the search
+   before the bracket test: u has converged, and a step that rounds onto the
+   bracket end just set to u must not restart bisection from the far end. */
 static float hairobb__solve_bracketed(const hairobb__ray_poly *c, float lo, float hi, float f_lo, float f_hi)
 {
     float u = f_lo == f_hi ? 0.5f * (lo + hi) : lo + (hi - lo) * (f_lo / (f_lo - f_hi));
@@ -1525,6 +1527,10 @@ static float hairobb__solve_bracketed(const hairobb__ray_poly *c, float lo, floa
         if (f == 0.0f) break;
         if ((f < 0.0f) == (f_lo < 0.0f)) { lo = u; f_lo = f; } else { hi = u; }
         next = u - f / derivative;
+        if (fabsf(next - u) <= 1e-7f) {
+            if (next >= lo && next <= hi) u = next;
+            break;
+        }
         if (!(next > lo && next < hi)) next = 0.5f * (lo + hi);
         if (fabsf(next - u) <= 1e-7f) { u = next; break; }
         u = next;
