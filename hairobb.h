@@ -1599,7 +1599,7 @@ static void hairobb__ribbon_f_v8(const hairobb__ray_poly *c, const float u_lanes
 static int hairobb__refine_piece(hairobb__ray_state *rs, const hairobb__ray_poly *c, uint32_t prim, float a, float b)
 {
     float u[8], f[8], d[8];
-    int found = 0;
+    int found = 0, half, k;
     u[0] = a;
     u[4] = b;
     u[2] = 0.5f * (a + b);
@@ -1609,17 +1609,17 @@ static int hairobb__refine_piece(hairobb__ray_state *rs, const hairobb__ray_poly
     hairobb__ribbon_f_v8(c, u, f, d);
     if (hairobb__sign_change(f[0], f[4]))
         return hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, a, b, f[0], f[4]));
-    if (hairobb__sign_change(f[0], f[2])) {
-        found |= hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, u[0], u[2], f[0], f[2]));
-    } else {
-        found |= hairobb__refine_range(rs, c, prim, u[0], u[1], f[0], f[1], d[0], d[1], 0);
-        found |= hairobb__refine_range(rs, c, prim, u[1], u[2], f[1], f[2], d[1], d[2], 0);
-    }
-    if (hairobb__sign_change(f[2], f[4])) {
-        found |= hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, u[2], u[4], f[2], f[4]));
-    } else {
-        found |= hairobb__refine_range(rs, c, prim, u[2], u[3], f[2], f[3], d[2], d[3], 0);
-        found |= hairobb__refine_range(rs, c, prim, u[3], u[4], f[3], f[4], d[3], d[4], 0);
+    for (half = 0; half < 4; half += 2) {
+        if (hairobb__sign_change(f[half], f[half + 2])) {
+            found |= hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, u[half], u[half + 2], f[half], f[half + 2]));
+            continue;
+        }
+        /* the quarters: depth 0, which finds nothing without a sign change
+           of f or of f' */
+        for (k = half; k < half + 2; ++k) {
+            if (hairobb__sign_change(f[k], f[k + 1]) || (d[k] < 0.0f) != (d[k + 1] < 0.0f))
+                found |= hairobb__refine_range(rs, c, prim, u[k], u[k + 1], f[k], f[k + 1], d[k], d[k + 1], 0);
+        }
     }
     return found;
 }
