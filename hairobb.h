@@ -1737,7 +1737,6 @@ static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state
              (hairobb__v4_le_bits(y, reach) + 15) & (hairobb__v4_le_bits(neg_reach, y) + 15) &
              (hairobb__v4_le_bits(hairobb__v4_set1(rs->tnear * rs->dir_length), z) + 15) &
              (hairobb__v4_le_bits(z, hairobb__v4_set1(rs->tfar * rs->dir_length)) + 15) & 16;
-    if (!inside) return 0;
     /* The same for the two lines parallel to the chord P0 P3 at distance
        max_r, widened by the rounding of the curve's points as the exact test
        evaluates them: |n.P2(u)| <= |n| |P2(u)| <= |n| r(u) on the ribbon,
@@ -1748,7 +1747,8 @@ static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state
         magnitude = hairobb__v4_hmax(hairobb__v4_max(hairobb__v4_abs(x), hairobb__v4_abs(y)));
         limit = sqrtf(nx * nx + ny * ny) * (max_r + magnitude * (16.0f * FLT_EPSILON));
         d = hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(nx), x), hairobb__v4_mul(hairobb__v4_set1(ny), y));
-        if (!hairobb__v4_le_bits(d, hairobb__v4_set1(limit)) || !hairobb__v4_le_bits(hairobb__v4_set1(-limit), d)) return 0;
+        inside &= (hairobb__v4_le_bits(d, hairobb__v4_set1(limit)) + 15) & (hairobb__v4_le_bits(hairobb__v4_set1(-limit), d) + 15);
+        if (!inside) return 0;   /* both tests, one branch */
     }
     return hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit);
 }
