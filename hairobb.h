@@ -449,6 +449,15 @@ static inline hairobb__v4 hairobb__v4_min(hairobb__v4 a, hairobb__v4 b) { return
 static inline hairobb__v4 hairobb__v4_max(hairobb__v4 a, hairobb__v4 b) { return _mm_max_ps(a, b); }
 static inline int hairobb__v4_le_bits(hairobb__v4 a, hairobb__v4 b) { return _mm_movemask_ps(_mm_cmple_ps(a, b)); }
 static inline void hairobb__v4_store(float *p, hairobb__v4 a) { _mm_storeu_ps(p, a); }
+static inline hairobb__v4 hairobb__v4_abs(hairobb__v4 a) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), a); }
+/* Rows a..d become columns (moves only). */
+static inline void hairobb__v4_transpose(hairobb__v4 *a, hairobb__v4 *b, hairobb__v4 *c, hairobb__v4 *d) { _MM_TRANSPOSE4_PS(*a, *b, *c, *d); }
+/* max(max(a0, a2), max(a1, a3)) with max's NaN rule. */
+static inline float hairobb__v4_hmax(hairobb__v4 a)
+{
+    __m128 t = _mm_max_ps(a, _mm_movehl_ps(a, a));
+    return _mm_cvtss_f32(_mm_max_ss(t, _mm_shuffle_ps(t, t, 1)));
+}
 /* x, or +-tiny where |x| < tiny: keeps 1/x finite for directions parallel to a slab. */
 static inline hairobb__v4 hairobb__v4_nonzero(hairobb__v4 x, float tiny)
 {
@@ -494,6 +503,27 @@ static inline int hairobb__v4_le_bits(hairobb__v4 a, hairobb__v4 b)
     return bits;
 }
 static inline void hairobb__v4_store(float *p, hairobb__v4 a) { memcpy(p, a.f, sizeof a.f); }
+static inline hairobb__v4 hairobb__v4_abs(hairobb__v4 a)
+{
+    hairobb__v4 r;
+    int i;
+    for (i = 0; i < 4; ++i) r.f[i] = fabsf(a.f[i]);
+    return r;
+}
+static inline void hairobb__v4_transpose(hairobb__v4 *a, hairobb__v4 *b, hairobb__v4 *c, hairobb__v4 *d)
+{
+    hairobb__v4 *rows[4];
+    float m[4][4];
+    int i, j;
+    rows[0] = a; rows[1] = b; rows[2] = c; rows[3] = d;
+    for (i = 0; i < 4; ++i) for (j = 0; j < 4; ++j) m[i][j] = rows[j]->f[i];
+    for (i = 0; i < 4; ++i) memcpy(rows[i]->f, m[i], sizeof m[i]);
+}
+static inline float hairobb__v4_hmax(hairobb__v4 a)
+{
+    float t0 = a.f[0] > a.f[2] ? a.f[0] : a.f[2], t1 = a.f[1] > a.f[3] ? a.f[1] : a.f[3];
+    return t0 > t1 ? t0 : t1;
+}
 #endif
 
 #if HAIROBB__AVX
@@ -2055,11 +2085,19 @@ HAIROBB_DEF void hairobb_bounds(const hairobb_bvh *bvh, float lower[3], float up
 /* ------------------------------------------------------------------------ */
 /* Traversal                                                                 */
 /* ------------------------------------------------------------------------ */
+#if defined(__GNUC__) || defined(__clang__)
+#define HAIROBB__INLINE static inline __attribute__((always_inline))
+#else
+#define HAIROBB__INLINE static inline
+#endif
+
 /* A ray prepared for slab tests against boxes in one frame. */
 typedef struct hairobb__slab_ray {
     float org[3];
     float rdir[3];              /* 1/dir, finite */
-    int near_is_upper[3];       /* rdir < 0: enter through the upper plane */
+    /* floats from a node's lower[0] to the plane entered (near) and left
+       (far) on each axis: the upper plane is entered where rdir < 0 */
+    int near_plane[3], far_plane[3];
 } hairobb__slab_ray;
 
 /* Everything one ray needs, computed once per ray. */
@@ -2085,9 +2123,12 @@ static void hairobb__slab_setup(hairobb__slab_ray *slab, const float org[3], con
     int k;
     for (k = 0; k < 3; ++k) {
         float d = fabsf(dir[k]) < HAIROBB__TINY_DIR ? (signbit(dir[k]) ? -HAIROBB__TINY_DIR : HAIROBB__TINY_DIR) : dir[k];
+        int upper_first = 0;
         slab->org[k] = org[k];
         slab->rdir[k] = 1.0f / d;
-        slab->near_is_upper[k] = slab->rdir[k] < 0.0f;
+        upper_first = slab->rdir[k] < 0.0f;
+        slab->near_plane[k] = (upper_first ? 3 * HAIROBB__W : 0) + k * HAIROBB__W;
+        slab->far_plane[k] = (upper_first ? 0 : 3 * HAIROBB__W) + k * HAIROBB__W;
     }
 }
 
@@ -2110,28 +2151,23 @@ static int hairobb__ray_setup(hairobb__ray_state *rs, const hairobb_ray *ray)
     return 1;
 }
 
-static hairobb__vn hairobb__far_scale(hairobb__vn tfar)
+HAIROBB__INLINE hairobb__vn hairobb__far_scale(hairobb__vn tfar)
 {
     return hairobb__vn_mul(tfar, hairobb__vn_set1(HAIROBB__FAR_SCALE));
 }
 
-/* One axis of a slab test: the near and far planes of every child. */
-static void hairobb__slab_axis(hairobb__vn lower, hairobb__vn upper, const hairobb__slab_ray *slab, int k,
-                               hairobb__vn *tn, hairobb__vn *tf)
-{
-    hairobb__vn o = hairobb__vn_set1(slab->org[k]), r = hairobb__vn_set1(slab->rdir[k]);
-    hairobb__vn near_plane = slab->near_is_upper[k] ? upper : lower, far_plane = slab->near_is_upper[k] ? lower : upper;
-    *tn = hairobb__vn_max(hairobb__vn_mul(hairobb__vn_sub(near_plane, o), r), *tn);
-    *tf = hairobb__vn_min(hairobb__vn_mul(hairobb__vn_sub(far_plane, o), r), *tf);
-}
-
-/* Slab test of a node's boxes ([axis][child] arrays) in the slab ray's frame. */
-static int hairobb__intersect_boxes(const float (*lower)[HAIROBB__W], const float (*upper)[HAIROBB__W], const hairobb__slab_ray *slab,
-                                    const hairobb__ray_state *rs, float dist[HAIROBB__W])
+/* Slab test of a node's boxes in the slab ray's frame; planes points at
+   lower[3][W], followed by upper[3][W] ([axis][child] arrays). */
+HAIROBB__INLINE int hairobb__intersect_boxes(const float *planes, const hairobb__slab_ray *slab,
+                                             const hairobb__ray_state *rs, float dist[HAIROBB__W])
 {
     hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
     int k;
-    for (k = 0; k < 3; ++k) hairobb__slab_axis(hairobb__vn_load(lower[k]), hairobb__vn_load(upper[k]), slab, k, &tn, &tf);
+    for (k = 0; k < 3; ++k) {
+        hairobb__vn o = hairobb__vn_set1(slab->org[k]), r = hairobb__vn_set1(slab->rdir[k]);
+        tn = hairobb__vn_max(hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_load(planes + slab->near_plane[k]), o), r), tn);
+        tf = hairobb__vn_min(hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_load(planes + slab->far_plane[k]), o), r), tf);
+    }
     hairobb__vn_store(dist, tn);
     return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
 }
@@ -2148,16 +2184,19 @@ static int hairobb__intersect_rotated_node(const hairobb__rotated_node *node, co
         dir[k] = hairobb__dot3(node->rotation + 3 * k, rs->dir);
     }
     hairobb__slab_setup(&slab, org, dir);
-    return hairobb__intersect_boxes(node->lower, node->upper, &slab, rs, dist);
+    return hairobb__intersect_boxes(node->lower[0], &slab, rs, dist);
 }
 
 /* Bytes decoded to the planes the builder checked; the ray moved to the
-   node's centre, and rotated by the decoded frame for a rotated node. */
-static int hairobb__intersect_compressed_node(const hairobb__compressed_node *node, int rotated,
-                                              const hairobb__ray_state *rs, float dist[HAIROBB__W])
+   node's centre, and rotated by the decoded frame for a rotated node. The
+   byte planes lower[3][W], upper[3][W] are laid out as the float ones, so
+   the slab ray's plane offsets index them too. */
+HAIROBB__INLINE int hairobb__intersect_compressed_node(const hairobb__compressed_node *node, int rotated,
+                                                       const hairobb__ray_state *rs, float dist[HAIROBB__W])
 {
     hairobb__slab_ray slab;
     hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
+    const signed char *planes = node->lower[0];
     float moved[3];
     int k;
     for (k = 0; k < 3; ++k) moved[k] = rs->org[k] - node->centre[k];
@@ -2174,31 +2213,35 @@ static int hairobb__intersect_compressed_node(const hairobb__compressed_node *no
         memcpy(slab.org, moved, sizeof moved);
     }
     for (k = 0; k < 3; ++k) {
-        hairobb__vn step = hairobb__vn_set1(node->step[k]);
-        hairobb__slab_axis(hairobb__vn_mul(hairobb__vn_from_bytes(node->lower[k]), step),
-                           hairobb__vn_mul(hairobb__vn_from_bytes(node->upper[k]), step), &slab, k, &tn, &tf);
+        hairobb__vn o = hairobb__vn_set1(slab.org[k]), r = hairobb__vn_set1(slab.rdir[k]), step = hairobb__vn_set1(node->step[k]);
+        hairobb__vn near_plane = hairobb__vn_mul(hairobb__vn_from_bytes(planes + slab.near_plane[k]), step);
+        hairobb__vn far_plane = hairobb__vn_mul(hairobb__vn_from_bytes(planes + slab.far_plane[k]), step);
+        tn = hairobb__vn_max(hairobb__vn_mul(hairobb__vn_sub(near_plane, o), r), tn);
+        tf = hairobb__vn_min(hairobb__vn_mul(hairobb__vn_sub(far_plane, o), r), tf);
     }
     hairobb__vn_store(dist, tn);
     return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
 }
 
 /* Each child's rotation decoded as in the builder, the ray transformed per
-   child (lanes), then slab tests against its decoded byte planes. */
-static int hairobb__intersect_compressed_obb_node(const hairobb__compressed_obb_node *node, const hairobb__ray_state *rs,
-                                                  float dist[HAIROBB__W])
+   child (lanes), then slab tests against its decoded byte planes; 1/d
+   clamped as in hairobb__intersect_obb_node. */
+HAIROBB__INLINE int hairobb__intersect_compressed_obb_node(const hairobb__compressed_obb_node *node,
+                                                           const hairobb__ray_state *rs, float dist[HAIROBB__W])
 {
     hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
     hairobb__vn ox = hairobb__vn_set1(rs->org[0] - node->centre[0]), oy = hairobb__vn_set1(rs->org[1] - node->centre[1]);
     hairobb__vn oz = hairobb__vn_set1(rs->org[2] - node->centre[2]);
     hairobb__vn dx = hairobb__vn_set1(rs->dir[0]), dy = hairobb__vn_set1(rs->dir[1]), dz = hairobb__vn_set1(rs->dir[2]);
     hairobb__vn one = hairobb__vn_set1(1.0f);
+    hairobb__vn big = hairobb__vn_set1(1.0f / HAIROBB__TINY_DIR), neg_big = hairobb__vn_set1(-(1.0f / HAIROBB__TINY_DIR));
     int k;
     for (k = 0; k < 3; ++k) {
         hairobb__vn m0 = hairobb__vn_from_bytes(node->rotation[3 * k]), m1 = hairobb__vn_from_bytes(node->rotation[3 * k + 1]);
         hairobb__vn m2 = hairobb__vn_from_bytes(node->rotation[3 * k + 2]);
         hairobb__vn o = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, ox), hairobb__vn_mul(m1, oy)), hairobb__vn_mul(m2, oz));
         hairobb__vn d = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, dx), hairobb__vn_mul(m1, dy)), hairobb__vn_mul(m2, dz));
-        hairobb__vn r = hairobb__vn_div(one, hairobb__vn_nonzero(d, HAIROBB__TINY_DIR));
+        hairobb__vn r = hairobb__vn_min(hairobb__vn_max(hairobb__vn_div(one, d), neg_big), big);
         hairobb__vn step = hairobb__vn_set1(node->step[k]);
         hairobb__vn t0 = hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_mul(hairobb__vn_from_bytes(node->lower[k]), step), o), r);
         hairobb__vn t1 = hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_mul(hairobb__vn_from_bytes(node->upper[k]), step), o), r);
@@ -2209,99 +2252,118 @@ static int hairobb__intersect_compressed_obb_node(const hairobb__compressed_obb_
     return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
 }
 
-static int hairobb__intersect_obb_node(const hairobb__obb_node *node, const hairobb__ray_state *rs, float dist[HAIROBB__W])
+/* Each child's slab pair along a row of its map is [0, 1] in unit space.
+   1/d is clamped to +-1/tiny, which is 1/d with d replaced by +-tiny where
+   |d| < tiny (as hairobb__slab_setup does), in two operations. */
+HAIROBB__INLINE int hairobb__intersect_obb_node(const hairobb__obb_node *node, const hairobb__ray_state *rs, float dist[HAIROBB__W])
 {
     hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
-    hairobb__vn one = hairobb__vn_set1(1.0f);
+    hairobb__vn one = hairobb__vn_set1(1.0f), zero = hairobb__vn_set1(0.0f);
+    hairobb__vn big = hairobb__vn_set1(1.0f / HAIROBB__TINY_DIR), neg_big = hairobb__vn_set1(-(1.0f / HAIROBB__TINY_DIR));
     hairobb__vn ox = hairobb__vn_set1(rs->org[0] - node->centre[0]), oy = hairobb__vn_set1(rs->org[1] - node->centre[1]);
     hairobb__vn oz = hairobb__vn_set1(rs->org[2] - node->centre[2]);
     hairobb__vn dx = hairobb__vn_set1(rs->dir[0]), dy = hairobb__vn_set1(rs->dir[1]), dz = hairobb__vn_set1(rs->dir[2]);
-    int row;
-    for (row = 0; row < 3; ++row) {
-        hairobb__vn m0 = hairobb__vn_load(node->xfm[3 * row]), m1 = hairobb__vn_load(node->xfm[3 * row + 1]);
-        hairobb__vn m2 = hairobb__vn_load(node->xfm[3 * row + 2]), m3 = hairobb__vn_load(node->xfm[9 + row]);
-        hairobb__vn o = hairobb__vn_add(hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, ox), hairobb__vn_mul(m1, oy)), hairobb__vn_mul(m2, oz)), m3);
-        hairobb__vn d = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, dx), hairobb__vn_mul(m1, dy)), hairobb__vn_mul(m2, dz));
-        hairobb__vn r = hairobb__vn_div(one, hairobb__vn_nonzero(d, HAIROBB__TINY_DIR));
-        hairobb__vn t0 = hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_set1(0.0f), o), r);
-        hairobb__vn t1 = hairobb__vn_mul(hairobb__vn_sub(one, o), r);
-        tn = hairobb__vn_max(hairobb__vn_min(t0, t1), tn);
-        tf = hairobb__vn_min(hairobb__vn_max(t0, t1), tf);
-    }
+#define HAIROBB__OBB_ROW(row) do { \
+        hairobb__vn m0 = hairobb__vn_load(node->xfm[3 * (row)]), m1 = hairobb__vn_load(node->xfm[3 * (row) + 1]); \
+        hairobb__vn m2 = hairobb__vn_load(node->xfm[3 * (row) + 2]), m3 = hairobb__vn_load(node->xfm[9 + (row)]); \
+        hairobb__vn o = hairobb__vn_add(hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, ox), hairobb__vn_mul(m1, oy)), hairobb__vn_mul(m2, oz)), m3); \
+        hairobb__vn d = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, dx), hairobb__vn_mul(m1, dy)), hairobb__vn_mul(m2, dz)); \
+        hairobb__vn r = hairobb__vn_min(hairobb__vn_max(hairobb__vn_div(one, d), neg_big), big); \
+        hairobb__vn t0 = hairobb__vn_mul(hairobb__vn_sub(zero, o), r); \
+        hairobb__vn t1 = hairobb__vn_mul(hairobb__vn_sub(one, o), r); \
+        tn = hairobb__vn_max(hairobb__vn_min(t0, t1), tn); \
+        tf = hairobb__vn_min(hairobb__vn_max(t0, t1), tf); \
+    } while (0)
+    HAIROBB__OBB_ROW(0);
+    HAIROBB__OBB_ROW(1);
+    HAIROBB__OBB_ROW(2);
+#undef HAIROBB__OBB_ROW
     hairobb__vn_store(dist, tn);
     return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
 }
 
 static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint64_t ref, int any_hit);
 
-/* Nearest-first traversal; any_hit stops at the first hit. */
+/* Nearest-first traversal; any_hit stops at the first hit. A node with
+   several hit children pushes them all, sorted so that the nearest is on
+   top, and goes on with that one. */
 static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int any_hit)
 {
     uint64_t stack_ref[HAIROBB__STACK];
     float stack_dist[HAIROBB__STACK];
     int sp = 0, found = 0;
-    stack_ref[sp] = bvh->root;
-    stack_dist[sp] = rs->tnear;
-    ++sp;
-    while (sp > 0) {
-        uint64_t ref;
-        --sp;
-        ref = stack_ref[sp];
-        if (stack_dist[sp] > rs->tfar) continue;
-        while (HAIROBB__REF_TYPE(ref) != HAIROBB__REF_LEAF && HAIROBB__REF_TYPE(ref) != HAIROBB__REF_EMPTY) {
+    uint64_t ref = bvh->root;
+    for (;;) {
+        unsigned type = HAIROBB__REF_TYPE(ref);
+        if (type != HAIROBB__REF_LEAF && type != HAIROBB__REF_EMPTY) {
             const void *node = bvh->nodes + (ref & ~(uint64_t)15);
             const uint64_t *child;
             float dist[HAIROBB__W];
-            int bits, i, hits = 0;
-            uint64_t hit_ref[HAIROBB__W];
-            float hit_dist[HAIROBB__W];
-            if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_AABB) {
-                const hairobb__aabb_node *aabb = HAIROBB__CAST(const hairobb__aabb_node *, node);
-                bits = hairobb__intersect_boxes(aabb->lower, aabb->upper, &rs->world, rs, dist);
-                child = aabb->child;
-            } else if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_ROTATED) {
-                bits = hairobb__intersect_rotated_node(HAIROBB__CAST(const hairobb__rotated_node *, node), rs, dist);
-                child = HAIROBB__CAST(const hairobb__rotated_node *, node)->child;
-            } else if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_QOBB_PER_CHILD) {
+            int bits, i;
+            if (type == HAIROBB__REF_QOBB_PER_CHILD) {      /* the default layout's types first */
                 bits = hairobb__intersect_compressed_obb_node(HAIROBB__CAST(const hairobb__compressed_obb_node *, node), rs, dist);
                 child = HAIROBB__CAST(const hairobb__compressed_obb_node *, node)->child;
-            } else if (HAIROBB__REF_TYPE(ref) >= HAIROBB__REF_QAABB) {
+            } else if (type == HAIROBB__REF_QAABB || type == HAIROBB__REF_QOBB) {
                 bits = hairobb__intersect_compressed_node(HAIROBB__CAST(const hairobb__compressed_node *, node),
-                                                          HAIROBB__REF_TYPE(ref) == HAIROBB__REF_QOBB, rs, dist);
+                                                          type == HAIROBB__REF_QOBB, rs, dist);
                 child = HAIROBB__CAST(const hairobb__compressed_node *, node)->child;
+            } else if (type == HAIROBB__REF_AABB) {
+                const hairobb__aabb_node *aabb = HAIROBB__CAST(const hairobb__aabb_node *, node);
+                bits = hairobb__intersect_boxes(aabb->lower[0], &rs->world, rs, dist);
+                child = aabb->child;
+            } else if (type == HAIROBB__REF_ROTATED) {
+                bits = hairobb__intersect_rotated_node(HAIROBB__CAST(const hairobb__rotated_node *, node), rs, dist);
+                child = HAIROBB__CAST(const hairobb__rotated_node *, node)->child;
             } else {
                 bits = hairobb__intersect_obb_node(HAIROBB__CAST(const hairobb__obb_node *, node), rs, dist);
                 child = HAIROBB__CAST(const hairobb__obb_node *, node)->child;
             }
-            if (!bits) { ref = HAIROBB__REF_EMPTY; break; }
-            i = hairobb__lowest_bit((unsigned)bits);
-            if (!(bits & (bits - 1))) { ref = child[i]; continue; }   /* one hit: the common case */
-            /* insertion sort of the hit children, nearest last */
-            while (bits) {
-                int j = hairobb__lowest_bit((unsigned)bits);
+            if (bits) {
+                int base = sp;
+                i = hairobb__lowest_bit((unsigned)bits);
                 bits &= bits - 1;
-                for (i = hits; i > 0 && hit_dist[i - 1] < dist[j]; --i) {
-                    hit_ref[i] = hit_ref[i - 1];
-                    hit_dist[i] = hit_dist[i - 1];
+                if (!bits) { ref = child[i]; continue; }   /* one hit: the common case */
+                if (!(bits & (bits - 1))) {                 /* two: the farther one waits */
+                    int j = hairobb__lowest_bit((unsigned)bits);
+                    int i_first = dist[i] < dist[j];        /* as the sort below orders them */
+                    stack_ref[sp] = i_first ? child[j] : child[i];
+                    stack_dist[sp] = i_first ? dist[j] : dist[i];
+                    ++sp;
+                    ref = i_first ? child[i] : child[j];
+                    continue;
                 }
-                hit_ref[i] = child[j];
-                hit_dist[i] = dist[j];
-                ++hits;
-            }
-            for (i = 0; i < hits - 1; ++i) {
-                stack_ref[sp] = hit_ref[i];
-                stack_dist[sp] = hit_dist[i];
+                /* insertion sort onto the stack, nearest on top; equal
+                   distances keep child order */
+                stack_ref[sp] = child[i];
+                stack_dist[sp] = dist[i];
                 ++sp;
+                do {
+                    int j = hairobb__lowest_bit((unsigned)bits);
+                    float d = dist[j];
+                    bits &= bits - 1;
+                    for (i = sp; i > base && stack_dist[i - 1] < d; --i) {
+                        stack_ref[i] = stack_ref[i - 1];
+                        stack_dist[i] = stack_dist[i - 1];
+                    }
+                    stack_ref[i] = child[j];
+                    stack_dist[i] = d;
+                    ++sp;
+                } while (bits);
+                ref = stack_ref[--sp];
+                continue;
             }
-            ref = hit_ref[hits - 1];
+        } else if (type == HAIROBB__REF_LEAF) {
+            if (hairobb__intersect_leaf(bvh, rs, ref, any_hit)) {
+                found = 1;
+                if (any_hit) return 1;
+            }
         }
-        if (HAIROBB__REF_TYPE(ref) != HAIROBB__REF_LEAF) continue;
-        if (hairobb__intersect_leaf(bvh, rs, ref, any_hit)) {
-            found = 1;
-            if (any_hit) return 1;
-        }
+        do {
+            if (sp == 0) return found;
+            --sp;
+        } while (stack_dist[sp] > rs->tfar);
+        ref = stack_ref[sp];
     }
-    return found;
 }
 
 /* ------------------------------------------------------------------------ */
@@ -2312,19 +2374,28 @@ typedef struct hairobb__ray_curve {
     float x[4], y[4], z[4], r[4];
 } hairobb__ray_curve;
 
-static void hairobb__to_ray_space(const hairobb__ray_state *rs, const float *cp, hairobb__ray_curve *c)
+/* Also returns x, y, z, r as vectors, lane i = control point i. */
+HAIROBB__INLINE void hairobb__to_ray_space_v4(const hairobb__ray_state *rs, const float *cp, hairobb__ray_curve *c,
+                                              hairobb__v4 *x, hairobb__v4 *y, hairobb__v4 *z, hairobb__v4 *r)
 {
-    int i;
-    for (i = 0; i < 4; ++i) {
-        float q[3];
-        q[0] = cp[4 * i] - rs->org[0];
-        q[1] = cp[4 * i + 1] - rs->org[1];
-        q[2] = cp[4 * i + 2] - rs->org[2];
-        c->x[i] = hairobb__dot3(rs->frame, q);
-        c->y[i] = hairobb__dot3(rs->frame + 3, q);
-        c->z[i] = hairobb__dot3(rs->frame + 6, q);
-        c->r[i] = cp[4 * i + 3];
-    }
+    hairobb__v4 p0 = hairobb__v4_load(cp), p1 = hairobb__v4_load(cp + 4);
+    hairobb__v4 p2 = hairobb__v4_load(cp + 8), p3 = hairobb__v4_load(cp + 12);
+    hairobb__v4 qx, qy, qz;
+    hairobb__v4_transpose(&p0, &p1, &p2, &p3);
+    qx = hairobb__v4_sub(p0, hairobb__v4_set1(rs->org[0]));
+    qy = hairobb__v4_sub(p1, hairobb__v4_set1(rs->org[1]));
+    qz = hairobb__v4_sub(p2, hairobb__v4_set1(rs->org[2]));
+#define HAIROBB__ROW(f) hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1((f)[0]), qx), \
+        hairobb__v4_mul(hairobb__v4_set1((f)[1]), qy)), hairobb__v4_mul(hairobb__v4_set1((f)[2]), qz))
+    *x = HAIROBB__ROW(rs->frame);
+    *y = HAIROBB__ROW(rs->frame + 3);
+    *z = HAIROBB__ROW(rs->frame + 6);
+#undef HAIROBB__ROW
+    *r = p3;
+    hairobb__v4_store(c->x, *x);
+    hairobb__v4_store(c->y, *y);
+    hairobb__v4_store(c->z, *z);
+    hairobb__v4_store(c->r, *r);
 }
 
 /* The same curve in power form, a[0] + a[1] u + a[2] u^2 + a[3] u^3: the
@@ -2385,7 +2456,9 @@ static int hairobb__try_hit(hairobb__ray_state *rs, const hairobb__ray_poly *c, 
 }
 
 /* Root of f in [lo, hi] where f changes sign: Newton steps, bisection when a
-   step leaves the bracket. */
+   step leaves the bracket. A Newton step of 1e-7 or less ends the search
+   before the bracket test: u has converged, and a step that rounds onto the
+   bracket end just set to u must not restart bisection from the far end. */
 static float hairobb__solve_bracketed(const hairobb__ray_poly *c, float lo, float hi, float f_lo, float f_hi)
 {
     float u = f_lo == f_hi ? 0.5f * (lo + hi) : lo + (hi - lo) * (f_lo / (f_lo - f_hi));
@@ -2396,11 +2469,20 @@ static float hairobb__solve_bracketed(const hairobb__ray_poly *c, float lo, floa
         if (f == 0.0f) break;
         if ((f < 0.0f) == (f_lo < 0.0f)) { lo = u; f_lo = f; } else { hi = u; }
         next = u - f / derivative;
+        if (fabsf(next - u) <= 1e-7f) {
+            if (next >= lo && next <= hi) u = next;
+            break;
+        }
         if (!(next > lo && next < hi)) next = 0.5f * (lo + hi);
         if (fabsf(next - u) <= 1e-7f) { u = next; break; }
         u = next;
     }
     return u;
+}
+
+static int hairobb__sign_change(float fa, float fb)
+{
+    return (fa <= 0.0f && fb >= 0.0f) || (fa >= 0.0f && fb <= 0.0f);
 }
 
 /* Roots of f in [a, b], each tried as a hit. A sign change brackets one.
@@ -2412,7 +2494,7 @@ static int hairobb__refine_range(hairobb__ray_state *rs, const hairobb__ray_poly
 {
     float lo = a, hi = b, middle, f_middle, d_middle;
     int found = 0, iteration;
-    if ((fa <= 0.0f && fb >= 0.0f) || (fa >= 0.0f && fb <= 0.0f))
+    if (hairobb__sign_change(fa, fb))
         return hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, a, b, fa, fb));
     if (depth > 0) {
         middle = 0.5f * (a + b);
@@ -2435,11 +2517,53 @@ static int hairobb__refine_range(hairobb__ray_state *rs, const hairobb__ray_poly
     return found;
 }
 
+/* hairobb__ribbon_f and its derivative at 8 parameters at once, rounded as
+   it rounds. */
+static void hairobb__ribbon_f_v8(const hairobb__ray_poly *c, const float u_lanes[8], float f[8], float derivative[8])
+{
+    hairobb__v8 u = hairobb__v8_load(u_lanes), x, y, dx, dy, ddx, ddy;
+#define HAIROBB__HORNER(a, value, d1, d2) \
+    value = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul( \
+        hairobb__v8_set1(a[3]), u), hairobb__v8_set1(a[2])), u), hairobb__v8_set1(a[1])), u), hairobb__v8_set1(a[0])); \
+    d1 = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(hairobb__v8_set1(3.0f * a[3]), u), \
+        hairobb__v8_set1(2.0f * a[2])), u), hairobb__v8_set1(a[1])); \
+    d2 = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_set1(6.0f * a[3]), u), hairobb__v8_set1(2.0f * a[2]))
+    HAIROBB__HORNER(c->x, x, dx, ddx);
+    HAIROBB__HORNER(c->y, y, dy, ddy);
+#undef HAIROBB__HORNER
+    hairobb__v8_store(derivative, hairobb__v8_add(hairobb__v8_add(hairobb__v8_add(hairobb__v8_mul(dx, dx), hairobb__v8_mul(dy, dy)),
+                                                                  hairobb__v8_mul(x, ddx)), hairobb__v8_mul(y, ddy)));
+    hairobb__v8_store(f, hairobb__v8_add(hairobb__v8_mul(x, dx), hairobb__v8_mul(y, dy)));
+}
+
+/* hairobb__refine_range(a, b, ..., depth 2), with f and f' at the ends,
+   the middle and the quarters evaluated at once up front. */
 static int hairobb__refine_piece(hairobb__ray_state *rs, const hairobb__ray_poly *c, uint32_t prim, float a, float b)
 {
-    float da, db;
-    float fa = hairobb__ribbon_f(c, a, &da), fb = hairobb__ribbon_f(c, b, &db);
-    return hairobb__refine_range(rs, c, prim, a, b, fa, fb, da, db, 2);
+    float u[8], f[8], d[8];
+    int found = 0, half, k;
+    u[0] = a;
+    u[4] = b;
+    u[2] = 0.5f * (a + b);
+    u[1] = 0.5f * (a + u[2]);
+    u[3] = 0.5f * (u[2] + b);
+    u[5] = u[6] = u[7] = b;
+    hairobb__ribbon_f_v8(c, u, f, d);
+    if (hairobb__sign_change(f[0], f[4]))
+        return hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, a, b, f[0], f[4]));
+    for (half = 0; half < 4; half += 2) {
+        if (hairobb__sign_change(f[half], f[half + 2])) {
+            found |= hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, u[half], u[half + 2], f[half], f[half + 2]));
+            continue;
+        }
+        /* the quarters: depth 0, which finds nothing without a sign change
+           of f or of f' */
+        for (k = half; k < half + 2; ++k) {
+            if (hairobb__sign_change(f[k], f[k + 1]) || (d[k] < 0.0f) != (d[k + 1] < 0.0f))
+                found |= hairobb__refine_range(rs, c, prim, u[k], u[k + 1], f[k], f[k + 1], d[k], d[k + 1], 0);
+        }
+    }
+    return found;
 }
 
 /* The linear piece alone (HAIROBB_PRECISION_PIECES): hit where the closest
@@ -2460,25 +2584,25 @@ static int hairobb__piece_hit(hairobb__ray_state *rs, const hairobb__ray_curve *
    h^2/8 max|P''| and |P''| <= 6 max|second difference|: widening the chord
    test by that (and the same for r), plus rounding of the evaluated points,
    misses no root of the ribbon. */
-static float hairobb__chord_pad(const hairobb__ray_curve *c, int pieces)
+static float hairobb__chord_pad(const hairobb__ray_curve *c, int pieces, float magnitude)
 {
-    float bend = 0.0f, bend_r = 0.0f, magnitude = 0.0f;
+    float bend = 0.0f, bend_r = 0.0f;
     int i;
     for (i = 0; i < 2; ++i) {
         float ddx = c->x[i] - 2.0f * c->x[i + 1] + c->x[i + 2], ddy = c->y[i] - 2.0f * c->y[i + 1] + c->y[i + 2];
         bend = hairobb__maxf(bend, sqrtf(ddx * ddx + ddy * ddy));
         bend_r = hairobb__maxf(bend_r, fabsf(c->r[i] - 2.0f * c->r[i + 1] + c->r[i + 2]));
     }
-    for (i = 0; i < 4; ++i) magnitude = hairobb__maxf(magnitude, hairobb__maxf(fabsf(c->x[i]), fabsf(c->y[i])));
     return (bend + bend_r) * (0.75f / (float)(pieces * pieces)) + magnitude * (8.0f * FLT_EPSILON);
 }
 
+/* magnitude: the largest |x|, |y| of the control points */
 static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *rs, const hairobb__ray_curve *c,
-                                    uint32_t prim, int any_hit)
+                                    float magnitude, uint32_t prim, int any_hit)
 {
     hairobb__ray_poly poly;
     int have_poly = 0, chunk, found = 0;
-    float pad = bvh->precision == HAIROBB_PRECISION_PIECES ? 0.0f : hairobb__chord_pad(c, bvh->pieces);
+    float pad = bvh->precision == HAIROBB_PRECISION_PIECES ? 0.0f : hairobb__chord_pad(c, bvh->pieces, magnitude);
 
     for (chunk = 0; chunk < bvh->piece_chunks; ++chunk) {
         const float (*w)[4][8] = bvh->piece_weights[chunk];
@@ -2541,19 +2665,34 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
 static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint32_t prim, int any_hit)
 {
     hairobb__ray_curve c;
-    float max_r, min_x, max_x, min_y, max_y, min_z, max_z;
-    int i;
-    hairobb__to_ray_space(rs, bvh->vertices + 4 * (size_t)bvh->indices[prim], &c);
-    max_r = hairobb__maxf(hairobb__maxf(c.r[0], c.r[1]), hairobb__maxf(c.r[2], c.r[3]));
-    min_x = max_x = c.x[0]; min_y = max_y = c.y[0]; min_z = max_z = c.z[0];
-    for (i = 1; i < 4; ++i) {
-        min_x = hairobb__minf(min_x, c.x[i]); max_x = hairobb__maxf(max_x, c.x[i]);
-        min_y = hairobb__minf(min_y, c.y[i]); max_y = hairobb__maxf(max_y, c.y[i]);
-        min_z = hairobb__minf(min_z, c.z[i]); max_z = hairobb__maxf(max_z, c.z[i]);
+    hairobb__v4 x, y, z, r, reach, neg_reach;
+    float max_r, magnitude;
+    int inside;
+    hairobb__to_ray_space_v4(rs, bvh->vertices + 4 * (size_t)bvh->indices[prim], &c, &x, &y, &z, &r);
+    max_r = hairobb__v4_hmax(r);
+    reach = hairobb__v4_set1(max_r);
+    neg_reach = hairobb__v4_set1(-max_r);
+    /* some control point on the near side of each of the four lines
+       x, y = +-max_r, and of the planes z = tnear, tfar (times |dir|): each
+       4-bit mask is nonzero, that is, has bit 4 set once 15 is added */
+    inside = (hairobb__v4_le_bits(x, reach) + 15) & (hairobb__v4_le_bits(neg_reach, x) + 15) &
+             (hairobb__v4_le_bits(y, reach) + 15) & (hairobb__v4_le_bits(neg_reach, y) + 15) &
+             (hairobb__v4_le_bits(hairobb__v4_set1(rs->tnear * rs->dir_length), z) + 15) &
+             (hairobb__v4_le_bits(z, hairobb__v4_set1(rs->tfar * rs->dir_length)) + 15) & 16;
+    /* The same for the two lines parallel to the chord P0 P3 at distance
+       max_r, widened by the rounding of the curve's points as the exact test
+       evaluates them: |n.P2(u)| <= |n| |P2(u)| <= |n| r(u) on the ribbon,
+       and n.P2(u) lies between the extreme n.Pi. */
+    {
+        float nx = c.y[0] - c.y[3], ny = c.x[3] - c.x[0], limit;
+        hairobb__v4 d;
+        magnitude = hairobb__v4_hmax(hairobb__v4_max(hairobb__v4_abs(x), hairobb__v4_abs(y)));
+        limit = sqrtf(nx * nx + ny * ny) * (max_r + magnitude * (16.0f * FLT_EPSILON));
+        d = hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(nx), x), hairobb__v4_mul(hairobb__v4_set1(ny), y));
+        inside &= (hairobb__v4_le_bits(d, hairobb__v4_set1(limit)) + 15) & (hairobb__v4_le_bits(hairobb__v4_set1(-limit), d) + 15);
+        if (!inside) return 0;   /* both tests, one branch */
     }
-    if (min_x > max_r || max_x < -max_r || min_y > max_r || max_y < -max_r) return 0;
-    if (max_z < rs->tnear * rs->dir_length || min_z > rs->tfar * rs->dir_length) return 0;
-    return hairobb__intersect_curve(bvh, rs, &c, prim, any_hit);
+    return hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit);
 }
 
 static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint64_t ref, int any_hit)
@@ -2569,22 +2708,43 @@ static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *r
     return found;
 }
 
+/* hairobb__bezier's value and first derivative for 4 curves at once, one
+   per lane, rounded as it rounds: rows p0..p3 hold the control points. */
+static void hairobb__bezier_v4(hairobb__v4 p0, hairobb__v4 p1, hairobb__v4 p2, hairobb__v4 p3, float u,
+                               hairobb__v4 *value, hairobb__v4 *d1)
+{
+    float s = 1.0f - u;
+    hairobb__v4 e0 = hairobb__v4_sub(p1, p0), e1 = hairobb__v4_sub(p2, p1), e2 = hairobb__v4_sub(p3, p2);
+    *d1 = hairobb__v4_mul(hairobb__v4_set1(3.0f),
+                          hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(s * s), e0),
+                                                          hairobb__v4_mul(hairobb__v4_set1(2.0f * u * s), e1)),
+                                          hairobb__v4_mul(hairobb__v4_set1(u * u), e2)));
+    *value = hairobb__v4_add(hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(s * s * s), p0),
+                                                             hairobb__v4_mul(hairobb__v4_set1(3.0f * u * s * s), p1)),
+                                             hairobb__v4_mul(hairobb__v4_set1(3.0f * u * u * s), p2)),
+                             hairobb__v4_mul(hairobb__v4_set1(u * u * u), p3));
+}
+
 /* Hit attributes, computed once for the final hit only. */
 static void hairobb__fill_hit(const hairobb_bvh *bvh, const hairobb__ray_state *rs, hairobb_hit *hit)
 {
     const float *cp = bvh->vertices + 4 * (size_t)bvh->indices[rs->hit_prim];
     hairobb__ray_curve c;
-    float u = rs->hit_u, world[4], tangent_xy[2], x, y, r, tlen2, along, n[3], nlen;
+    hairobb__v4 x4, y4, z4, r4, value, d1;
+    float u = rs->hit_u, at[4], tangent_at[4], tangent_xy[2], x, y, r, tlen2, along, n[3], nlen;
     const float *unit_dir = rs->frame + 6;
-    int k, i;
-    hairobb__to_ray_space(rs, cp, &c);
-    for (k = 0; k < 3; ++k) {
-        for (i = 0; i < 4; ++i) world[i] = cp[4 * i + k];
-        hairobb__bezier(world, u, &hit->tangent[k], NULL);
-    }
-    x = hairobb__bezier(c.x, u, &tangent_xy[0], NULL);
-    y = hairobb__bezier(c.y, u, &tangent_xy[1], NULL);
-    r = hairobb__bezier(c.r, u, NULL, NULL);
+    int k;
+    hairobb__bezier_v4(hairobb__v4_load(cp), hairobb__v4_load(cp + 4), hairobb__v4_load(cp + 8), hairobb__v4_load(cp + 12),
+                       u, &value, &d1);
+    hairobb__v4_store(tangent_at, d1);
+    for (k = 0; k < 3; ++k) hit->tangent[k] = tangent_at[k];
+    hairobb__to_ray_space_v4(rs, cp, &c, &x4, &y4, &z4, &r4);
+    hairobb__v4_transpose(&x4, &y4, &z4, &r4);     /* rows: control points (x, y, z, r) */
+    hairobb__bezier_v4(x4, y4, z4, r4, u, &value, &d1);
+    hairobb__v4_store(at, value);
+    hairobb__v4_store(tangent_at, d1);
+    x = at[0]; y = at[1]; r = at[3];
+    tangent_xy[0] = tangent_at[0]; tangent_xy[1] = tangent_at[1];
     tlen2 = tangent_xy[0] * tangent_xy[0] + tangent_xy[1] * tangent_xy[1];
     hit->v = 0.0f;
     if (r > 0.0f && tlen2 > 0.0f) {
