@@ -26,10 +26,10 @@ $(B)/test_reference: tests/test_reference.c tests/reference.h | $(B)
 
 # white-box tests on 4-wide and on 8-wide nodes
 # (their counting allocators lock a pthread mutex: builds allocate on several threads)
-$(B)/test_unit: tests/test_unit.c hairobb.h tests/reference.h tests/check.h | $(B)
+$(B)/test_unit: tests/test_unit.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=4 $< -o $@ $(LIBS) -lpthread
 
-$(B)/test_unit_w8: tests/test_unit.c hairobb.h tests/reference.h tests/check.h | $(B)
+$(B)/test_unit_w8: tests/test_unit.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=8 $< -o $@ $(LIBS) -lpthread
 
 # black-box: every combination of build options against the reference

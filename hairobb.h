@@ -56,16 +56,17 @@
    BUILD OPTIONS (hairobb_build_options; a zero-initialised struct = defaults)
      nodes                   HAIROBB_NODES_MIXED (default): AABB or OBB per node
                              by SAH; _AABB_ONLY and _OBB_ONLY for comparisons.
-     obb_layout              HAIROBB_OBB_DEFAULT = _COMPRESSED: every node keeps
-                             its child boxes as signed bytes in one frame (a
-                             byte rotation for OBB nodes): 96/160 bytes per
-                             4-/8-wide node. _PER_CHILD: the paper's
-                             uncompressed node, an affine map per child
-                             (240/464 bytes); _SHARED_ROTATION: one float
-                             rotation per node (176/304 bytes). On combed fur
-                             and straight.hair, 8-wide: compressed 27.9/26.6
-                             bytes per segment, per-child 72.5/69.0, at
-                             12-15% less speed (bench, see README).
+     obb_layout              HAIROBB_OBB_DEFAULT = _COMPRESSED_PER_CHILD: each
+                             child box in its own hair space, a rotation in
+                             signed bytes, the box in signed bytes times a
+                             step per axis (208 bytes per 8-wide node, 128
+                             4-wide); AABB nodes as byte boxes too.
+                             _PER_CHILD: the paper's uncompressed node, an
+                             affine map per child (464/240 bytes).
+                             _SHARED_ROTATION: one float rotation per node
+                             (304/176 bytes). _COMPRESSED: the paper's
+                             compressed node, one byte rotation shared by the
+                             children (160/96 bytes). @LAYOUT_FIGURES@
      spatial_splits          HAIROBB_AUTO (= off), _ON, _OFF: also try split
                              planes that clip segments (world and hair space);
                              a clipped segment is referenced by the leaves of
@@ -87,8 +88,13 @@
                              linear pieces alone, faster, less accurate.
      allocator_user          passed to HAIROBB_MALLOC/HAIROBB_FREE.
      progress, progress_user progress(progress_user, fraction) is called as the
-                             build goes (fraction rising to exactly 1); a
-                             nonzero return cancels: HAIROBB_ERROR_CANCELLED.
+                             build goes (fraction rising to exactly 1), on
+                             the calling thread only; a nonzero return
+                             cancels: HAIROBB_ERROR_CANCELLED.
+     threads                 0 (default): one build thread per core; 1: the
+                             calling thread only; at most 256. Every thread
+                             count builds the same tree (the top levels on
+                             the calling thread, then independent subtrees).
 
    HITS
      hairobb_hit: t, u, v as above; Ng the ribbon's unit normal facing the ray
@@ -107,6 +113,9 @@
      HAIROBB_ASSERT(x)       internal checks, default assert().
      HAIROBB_STATIC          make every function static to the including file.
      HAIROBB_NO_SIMD         plain C everywhere (same answers as the SIMD paths).
+     HAIROBB_NO_THREADS      build on the calling thread only. Otherwise, on
+                             POSIX systems, the build uses pthreads: link
+                             with -pthread (glibc 2.34 and later need nothing).
      HAIROBB_NODE_WIDTH      children per node, 4 or 8; default 8 where the
                              compiler targets AVX, else 4.
      SSE is used on x86-64; AVX for the 8-wide curve evaluation when the
@@ -1225,6 +1234,9 @@ static void hairobb__range_centre(const hairobb__builder *b, const hairobb__rang
     for (k = 0; k < 3; ++k) centre[k] = 0.5f * lower[k] + 0.5f * upper[k];
 }
 
+/* Above the tasks: the ranges the calling thread splits alone. */
+static int hairobb__at_top(const hairobb__builder *b, size_t count) { return b->task_limit && count > b->task_limit; }
+
 /* The cheapest split the policy and the subtree's tries allow; a median split
    when none is found (all centroids equal) or below the SAH depth. */
 static void hairobb__find_split(const hairobb__builder *b, const hairobb__range *r, unsigned depth,
@@ -1242,12 +1254,12 @@ static void hairobb__find_split(const hairobb__builder *b, const hairobb__range 
     if (depth < HAIROBB__SAH_DEPTH) {
         if (b->policy != HAIROBB_NODES_OBB_ONLY)
             hairobb__bin_split(b, r, NULL, 2.0f * HAIROBB__COST_AABB * area, slack, best);
-        /* not at the top of the tree, above the tasks: hair is sorted by place
-           there, and that part of the build is not spread over threads
-           (combed, straight.hair: 10% fewer build instructions, traced
-           instructions within 0.6%) */
+        /* a mixed tree's top (above the tasks) splits in world space only: hair
+           is sorted by place there, and that part of the build is not spread
+           over threads (combed, straight.hair: 10% fewer build instructions,
+           traced instructions within 0.6%) */
         if (b->policy != HAIROBB_NODES_AABB_ONLY && (tries & HAIROBB__TRY_HAIR_SPACE) &&
-            (b->task_limit == 0 || r->end - r->begin <= b->task_limit)) {
+            (b->policy == HAIROBB_NODES_OBB_ONLY || !hairobb__at_top(b, r->end - r->begin))) {
             float frame[9];
             hairobb__choose_hair_space(b, r, 1, 0, frame);
             hairobb__bin_split(b, r, frame, 2.0f * HAIROBB__COST_OBB * area, slack, best);
@@ -1266,8 +1278,8 @@ static void hairobb__find_split(const hairobb__builder *b, const hairobb__range 
 }
 
 /* "Skip what a scene doesn't need": spatial splits or clustering that won
-   none of HAIROBB__STRIKES splits in a row on the way down are not tried in
-   the subtree below. Hair-space binning is always tried: on combed hair it
+   none of HAIROBB__STRIKES splits in a row on the way down (below the top
+   of the tree, which is split by place) are not tried in the subtree below. Hair-space binning is always tried: on combed hair it
    loses near the root, where hair is sorted by place, and wins most splits
    below (80% of them), so no early verdict on it holds. */
 static void hairobb__update_tries(hairobb__tries *t, const hairobb__split *split)
@@ -1569,7 +1581,7 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
         if (count > 1) {
             size_t n = children[pick].range.end - children[pick].range.begin;
             hairobb__find_split(b, &children[pick].range, depth + 1, tries.enabled, &split);
-            hairobb__update_tries(&tries, &split);
+            if (!hairobb__at_top(b, n)) hairobb__update_tries(&tries, &split);
             if (n <= b->max_leaf && hairobb__leaf_cost(n, split.parent_area) <= split.cost) {
                 children[pick].final_leaf = 1;
                 continue;
@@ -1717,7 +1729,7 @@ static uint64_t hairobb__build_range(hairobb__builder *b, const hairobb__range *
     if (n == 1) return hairobb__make_leaf(b, r, depth);
     if (n <= b->task_limit) return hairobb__add_task(b, r, depth, tries);
     hairobb__find_split(b, r, depth, tries.enabled, &split);
-    hairobb__update_tries(&tries, &split);
+    if (!hairobb__at_top(b, n)) hairobb__update_tries(&tries, &split);
     if (n <= b->max_leaf && hairobb__leaf_cost(n, split.parent_area) <= split.cost)
         return hairobb__make_leaf(b, r, depth);
     return hairobb__build_node(b, r, depth, &split, tries);

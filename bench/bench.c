@@ -927,7 +927,7 @@ static void print_build_table(const scene_result *sr, const int selected[VARIANT
 {
     const variant_result *base = baseline_of(sr);
     char c1[48], c2[48], c3[48];
-    printf("\nbuild and memory (ratios: this / Embree flat r4; hairobb builds on 1 thread, Embree on all)\n");
+    printf("\nbuild and memory (ratios: this / Embree flat r4; both build on all cores)\n");
     printf("%-20s %-18s %-18s %-18s %s\n", "variant", "build s", "MB", "bytes/segment",
            "AABB/OBB nodes, leaves, segments/leaf, depth");
     for (int i = 0; i < VARIANT_COUNT; i++) {

@@ -399,6 +399,38 @@ static inline int scene_curly(hair_scene *s, size_t target_segments, uint64_t se
     return scene_strands_finish(&st, s, "curly");
 }
 
+/* Three bundles of strongly bent segments (1 long, the middle bent out by
+   0.05-0.2 in a random direction) along the x, y and z axes, all crossing
+   one small region (centres within +-0.2): object splits cannot separate
+   them, so spatial splits clip and clusters by orientation pay. Radius
+   0.002 growing to 0.005 along each segment. */
+static inline int scene_crossed(hair_scene *s, size_t n, uint64_t seed)
+{
+    scene_rng rng;
+    size_t i;
+    if (scene_alloc(s, n, "crossed") != 0) return 1;
+    scene_rng_seed(&rng, seed);
+    for (i = 0; i < n; ++i) {
+        float *v = s->vertices + 16 * i, o[3], e[3], len;
+        int axis = (int)(i % 3), k, j;
+        float bend = scene_rng_range(&rng, 0.05f, 0.2f);
+        for (k = 0; k < 3; ++k) {
+            o[k] = scene_rng_range(&rng, -0.2f, 0.2f);
+            e[k] = scene_rng_range(&rng, -1.0f, 1.0f);
+        }
+        e[axis] = 0.0f;
+        len = sqrtf(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+        if (!(len > 1e-3f)) { e[(axis + 1) % 3] = 1.0f; len = 1.0f; }
+        for (k = 0; k < 4; ++k) {
+            float t = (float)k / 3.0f - 0.5f, w = (k == 1 || k == 2) ? bend / 0.75f : 0.0f;
+            for (j = 0; j < 3; ++j) v[4 * k + j] = o[j] + (j == axis ? t : 0.0f) + w * e[j] / len;
+            v[4 * k + 3] = 0.002f + 0.001f * (float)k;
+        }
+    }
+    scene_update_bounds(s);
+    return 0;
+}
+
 /* Unconnected short curved segments in the box [-0.5, 0.5]^3: random centre
    and direction, length 0.02-0.06, a bend of up to 35% of the length whose
    plane twists along the segment, radius 0.0005-0.0012 with one end up to 2x

@@ -66,6 +66,7 @@ static void test_free(void *p, void *user)
 #include "../hairobb.h"
 #include "check.h"
 #include "reference.h"
+#include "scenes.h"
 
 static uint64_t rng_state = 0x9e3779b97f4a7c15ull;
 static float rnd(void)
@@ -250,30 +251,18 @@ static void test_clipped_parts(void)
     free(indices);
 }
 
-/* Three bundles of bent segments (1 long, middle bent out by 0.05-0.2 in a
-   random direction, radius 0.002 growing to 0.005) along x, y and z, all
-   crossing one small region (centres within +-0.2): object splits cannot
-   separate them, so spatial splits clip many and clusters by orientation pay. */
+/* The crossed bundles of tests/scenes.h (bent segments crossing one small
+   region: spatial splits clip many, clusters by orientation pay) in arrays
+   of their own. */
 static void make_crossed_scene(size_t n, float **vertices, uint32_t **indices)
 {
-    size_t i;
-    int k, j;
+    hair_scene s;
+    if (scene_crossed(&s, n, 11) != 0) { *vertices = NULL; *indices = NULL; return; }
     *vertices = (float *)malloc(16 * sizeof(float) * n);
     *indices = (uint32_t *)malloc(sizeof(uint32_t) * n);
-    for (i = 0; i < n; ++i) {
-        float *v = *vertices + 16 * i, o[3], e[3], len, bend = 0.05f + 0.15f * rnd();
-        int axis = (int)(i % 3);
-        for (k = 0; k < 3; ++k) { o[k] = 0.4f * (rnd() - 0.5f); e[k] = rnd() - 0.5f; }
-        e[axis] = 0.0f;
-        len = sqrtf(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
-        if (!(len > 1e-3f)) { e[(axis + 1) % 3] = 1.0f; len = 1.0f; }
-        for (k = 0; k < 4; ++k) {
-            float t = (float)k / 3.0f - 0.5f, w = (k == 1 || k == 2) ? bend / 0.75f : 0.0f;
-            for (j = 0; j < 3; ++j) v[4 * k + j] = o[j] + (j == axis ? t : 0.0f) + w * e[j] / len;
-            v[4 * k + 3] = 0.002f + 0.001f * (float)k;
-        }
-        (*indices)[i] = (uint32_t)(4 * i);
-    }
+    memcpy(*vertices, s.vertices, 16 * sizeof(float) * n);
+    memcpy(*indices, s.indices, sizeof(uint32_t) * n);
+    scene_free(&s);
 }
 
 /* Bounds: every sampled point of every ribbon lies inside the decoded boxes
