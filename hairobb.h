@@ -66,7 +66,11 @@
                              _SHARED_ROTATION: one float rotation per node
                              (304/176 bytes). _COMPRESSED: the paper's
                              compressed node, one byte rotation shared by the
-                             children (160/96 bytes). @LAYOUT_FIGURES@
+                             children (160/96 bytes). Measured 8-wide (bench,
+                             README): the default takes 32-35 bytes per
+                             segment against 67-73 for _PER_CHILD, at 8-12%
+                             less primary-ray speed; _COMPRESSED 26-28 at
+                             20-22% less.
      spatial_splits          HAIROBB_AUTO (= off), _ON, _OFF: also try split
                              planes that clip segments (world and hair space);
                              a clipped segment is referenced by the leaves of
