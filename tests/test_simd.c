@@ -86,6 +86,10 @@ int main(void)
             options.curve_pieces = 0;
             options.obb_layout = HAIROBB_OBB_SHARED_ROTATION;
             compare_paths(&scenes[k], &options, "shared-rotation OBBs");
+            options.obb_layout = HAIROBB_OBB_PER_CHILD;
+            compare_paths(&scenes[k], &options, "per-child float OBBs");
+            options.obb_layout = HAIROBB_OBB_COMPRESSED;
+            compare_paths(&scenes[k], &options, "compressed, shared byte rotation");
         }
         scene_free(&scenes[k]);
     }
