@@ -60,7 +60,8 @@
                              child box in its own hair space, a rotation in
                              signed bytes, the box in signed bytes times a
                              step per axis (208 bytes per 8-wide node, 128
-                             4-wide); AABB nodes as byte boxes too.
+                             4-wide); the few nodes near the root (AABB nodes,
+                             OBB nodes over 256 references) keep floats.
                              _PER_CHILD: the paper's uncompressed node, an
                              affine map per child (464/240 bytes).
                              _SHARED_ROTATION: one float rotation per node
@@ -334,6 +335,11 @@ HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray
 #define HAIROBB__SAH_DEPTH 40           /* deeper nodes split at the median, so depth stays bounded */
 #define HAIROBB__STACK ((HAIROBB__W - 1) * (HAIROBB__SAH_DEPTH + 32) + 1)  /* pushes per level x depth */
 #ifndef HAIROBB__SAMPLE
+/* The per-child compressed layout keeps float boxes in AABB nodes (the top
+   of the tree) and in OBB nodes over more than this many references: every
+   ray passes there, and they are few (combed, straight.hair, furBall_A:
+   +5-10% primary-ray speed for +0.4-0.7 bytes per segment). */
+#define HAIROBB__FLOAT_NODES 256
 #define HAIROBB__TASKS 64               /* about this many subtrees are built as tasks (threads) */
 #define HAIROBB__TASK_MIN 1024          /* of at least this many references, unless the input is smaller */
 #define HAIROBB__SAMPLE 16              /* segments sampled to rank hair-space candidates: 64 built 7% slower, traced the same */
@@ -1602,7 +1608,8 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
     if (b->policy == HAIROBB_NODES_AABB_ONLY) use_obb = 0;
 
     if (b->obb_layout == HAIROBB_OBB_COMPRESSED) node_type = use_obb ? HAIROBB__REF_QOBB : HAIROBB__REF_QAABB;
-    else if (b->obb_layout == HAIROBB_OBB_COMPRESSED_PER_CHILD) node_type = use_obb ? HAIROBB__REF_QOBB_PER_CHILD : HAIROBB__REF_QAABB;
+    else if (b->obb_layout == HAIROBB_OBB_COMPRESSED_PER_CHILD)   /* float nodes near the root: see HAIROBB__FLOAT_NODES */
+        node_type = !use_obb ? HAIROBB__REF_AABB : r->end - r->begin > HAIROBB__FLOAT_NODES ? HAIROBB__REF_OBB : HAIROBB__REF_QOBB_PER_CHILD;
     else if (use_obb && b->obb_layout == HAIROBB_OBB_PER_CHILD) node_type = HAIROBB__REF_OBB;
     else if (use_obb) node_type = HAIROBB__REF_ROTATED;
     else node_type = HAIROBB__REF_AABB;

@@ -255,7 +255,11 @@ static void check_scene(hair_scene *s, size_t ray_count, int expect_clipping, in
                         const config_result *compressed = &results[policy][compressed_layout][spatial][clustering][v];
                         if (!compressed->built || !per_child->built) continue;
                         ++pairs;
-                        if (compressed->memory < per_child->memory) ++smaller;
+                        /* the per-child compressed layout keeps float AABB nodes and float OBB
+                           nodes near the root: no smaller where those are all the tree has */
+                        if (compressed->memory < per_child->memory ||
+                            (compressed_layout == HAIROBB_OBB_COMPRESSED_PER_CHILD && compressed->memory <= per_child->memory))
+                            ++smaller;
                         else
                             printf("%s: %s, spatial %s, clustering %s, variant %d: compressed (layout %d) %zu bytes, per-child %zu\n",
                                    s->name, policy_names[policy], switch_names[spatial], switch_names[clustering], v,
@@ -266,7 +270,8 @@ static void check_scene(hair_scene *s, size_t ray_count, int expect_clipping, in
            "%d configurations in %.1f s\n",
            s->name, s->segment_count, rays.hit_count, rays.count, clipped, clustered, 3 * 5 * 3 * 3 * VARIANTS,
            scene_now() - t0);
-    CHECK(smaller == pairs, "%s: compressed smaller than per-child in %d of %d pairs", s->name, smaller, pairs);
+    CHECK(smaller == pairs, "%s: compressed smaller than per-child (per-child compressed: not larger) in %d of %d pairs",
+          s->name, smaller, pairs);
     if (expect_clipping) CHECK(clipped > 0, "%s: no spatial-split build clipped a segment", s->name);
     if (expect_clusters) CHECK(clustered > 0, "%s: clustering never changed the tree", s->name);
 }

@@ -658,7 +658,8 @@ static void test_bounds_and_traversal(void)
             if (layout == HAIROBB_OBB_DEFAULT) allowed = 1;     /* reported above */
             else if (layout == HAIROBB_OBB_COMPRESSED) allowed = type == HAIROBB__REF_QAABB || type == HAIROBB__REF_QOBB;
 #ifdef HAIROBB__REF_QOBB_PER_CHILD
-            else if (layout == HAIROBB_OBB_COMPRESSED_PER_CHILD) allowed = type == HAIROBB__REF_QAABB || type == HAIROBB__REF_QOBB_PER_CHILD;
+            else if (layout == HAIROBB_OBB_COMPRESSED_PER_CHILD)   /* float AABB nodes, float OBBs near the root */
+                allowed = type == HAIROBB__REF_AABB || type == HAIROBB__REF_OBB || type == HAIROBB__REF_QOBB_PER_CHILD;
 #endif
             else if (layout == HAIROBB_OBB_PER_CHILD) allowed = type == HAIROBB__REF_AABB || type == HAIROBB__REF_OBB;
             else allowed = type == HAIROBB__REF_AABB || type == HAIROBB__REF_ROTATED;
