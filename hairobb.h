@@ -68,10 +68,10 @@
                              (304/176 bytes). _COMPRESSED: the paper's
                              compressed node, one byte rotation shared by the
                              children (160/96 bytes). Measured 8-wide (bench,
-                             README): the default takes 32-35 bytes per
-                             segment against 67-73 for _PER_CHILD, at 8-12%
+                             README): the default takes 33-35 bytes per
+                             segment against 67-73 for _PER_CHILD, at 2-7%
                              less primary-ray speed; _COMPRESSED 26-28 at
-                             20-22% less.
+                             19-21% less.
      spatial_splits          HAIROBB_AUTO (= off), _ON, _OFF: also try split
                              planes that clip segments (world and hair space);
                              a clipped segment is referenced by the leaves of
