@@ -71,7 +71,7 @@
                              README): the default takes 33-35 bytes per
                              segment against 67-73 for _PER_CHILD, at 2-7%
                              less primary-ray speed; _COMPRESSED 26-28 at
-                             19-21% less.
+                             19-22% less.
      spatial_splits          HAIROBB_AUTO (= off), _ON, _OFF: also try split
                              planes that clip segments (world and hair space);
                              a clipped segment is referenced by the leaves of
