@@ -363,7 +363,7 @@ HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray
 #define HAIROBB__COST_SEGMENT 4.0f
 #endif
 
-/* Node references: low 4 bits type; inner nodes: byte offset (32-aligned);
+/* Node references: low 4 bits type; inner nodes: byte offset (a multiple of 16);
    leaves: first index into leaf_prims << 8 | count << 4 (while building:
    first position of ids). */
 #define HAIROBB__REF_AABB 0u
