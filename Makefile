@@ -10,10 +10,15 @@ LIBS      = -lm -pthread
 EMBREE    = -lembree3
 B         = build
 
-TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_unit_w8 $(B)/test_options $(B)/test_scenes $(B)/test_simd $(B)/test_simd_w8 $(B)/test_accuracy $(B)/test_far
+TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_unit_w8 $(B)/test_options $(B)/test_threads $(B)/test_scenes $(B)/test_simd $(B)/test_simd_w8 $(B)/test_accuracy $(B)/test_far
+# the same tests again under AddressSanitizer + UndefinedBehaviorSanitizer
+# (any report aborts the test), and the threads test under ThreadSanitizer
+SANITIZED = $(B)/asan_test_reference $(B)/asan_test_unit_w8 $(B)/asan_test_options $(B)/tsan_test_threads
+ASAN      = -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+TSAN      = -O1 -g -fsanitize=thread
 
 .PHONY: all test deps compile-matrix bench examples clean
-all: $(TESTS) $(B)/bench examples
+all: $(TESTS) $(SANITIZED) $(B)/bench examples
 
 deps:
 	@sh tests/install_deps.sh
@@ -35,6 +40,19 @@ $(B)/test_unit_w8: tests/test_unit.c hairobb.h tests/reference.h tests/scenes.h 
 # black-box: every combination of build options against the reference
 $(B)/test_options: tests/test_options.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS) -lpthread
+
+# threads: builds on 1 and 4 threads equal, 4 threads tracing one BVH
+$(B)/test_threads: tests/test_threads.c hairobb.h tests/scenes.h tests/check.h | $(B)
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
+
+$(B)/asan_test_reference: tests/test_reference.c tests/reference.h | $(B)
+	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
+$(B)/asan_test_unit_w8: tests/test_unit.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
+	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) -DHAIROBB_NODE_WIDTH=8 $< -o $@ $(LIBS)
+$(B)/asan_test_options: tests/test_options.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
+	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
+$(B)/tsan_test_threads: tests/test_threads.c hairobb.h tests/scenes.h tests/check.h | $(B)
+	$(CC) $(WARN) $(TSAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
 
 $(B)/test_scenes: tests/test_scenes.c tests/scenes.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
@@ -73,8 +91,8 @@ compile-matrix: | $(B)
 	    $$cc -x c++ -std=c++11 -Wall -Wextra -pedantic -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
 	    echo "compile-matrix: $$cc $$flags (C99 and C++11) clean"; done; done
 
-test: deps $(TESTS) compile-matrix examples
-	@sh tests/run_all.sh $(TESTS)
+test: deps $(TESTS) $(SANITIZED) compile-matrix examples
+	@sh tests/run_all.sh $(TESTS) $(SANITIZED)
 
 bench: $(B)/bench
 	$(B)/bench
