@@ -13,11 +13,16 @@ B         = build
 TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_unit_w8 $(B)/test_options $(B)/test_threads $(B)/test_scenes $(B)/test_simd $(B)/test_simd_w8 $(B)/test_accuracy $(B)/test_far
 # the same tests again under AddressSanitizer + UndefinedBehaviorSanitizer
 # (any report aborts the test), and the threads test under ThreadSanitizer
-SANITIZED = $(B)/asan_test_reference $(B)/asan_test_unit_w8 $(B)/asan_test_options $(B)/tsan_test_threads
+SANITIZED = $(B)/asan_test_reference $(B)/asan_test_unit_w8 $(B)/asan_test_options $(B)/tsan_test_threads \
+            $(B)/fuzz_build_60s
 ASAN      = -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 TSAN      = -O1 -g -fsanitize=thread
+# libFuzzer targets (clang): 60 s in `make test`, `make fuzz` for a long run
+FUZZCC    = clang
+FUZZ      = -std=c99 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -ffp-contract=off -I.
+FUZZ_SECONDS ?= 1800
 
-.PHONY: all test deps compile-matrix bench examples clean
+.PHONY: all test deps compile-matrix bench examples clean fuzz
 all: $(TESTS) $(SANITIZED) $(B)/bench examples
 
 deps:
@@ -53,6 +58,13 @@ $(B)/asan_test_options: tests/test_options.c hairobb.h tests/reference.h tests/s
 	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
 $(B)/tsan_test_threads: tests/test_threads.c hairobb.h tests/scenes.h tests/check.h | $(B)
 	$(CC) $(WARN) $(TSAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
+
+$(B)/fuzz_build: tests/fuzz_build.c hairobb.h | $(B) deps
+	$(FUZZCC) $(FUZZ) $< -o $@ $(LIBS)
+$(B)/fuzz_build_60s: $(B)/fuzz_build tests/fuzz_run.sh
+	@printf '#!/bin/sh\nexec sh tests/fuzz_run.sh $(B)/fuzz_build tests/fuzz_corpus/build 60\n' > $@ && chmod +x $@
+fuzz: $(B)/fuzz_build
+	sh tests/fuzz_run.sh $(B)/fuzz_build tests/fuzz_corpus/build $(FUZZ_SECONDS)
 
 $(B)/test_scenes: tests/test_scenes.c tests/scenes.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)

@@ -1,12 +1,14 @@
 #!/bin/sh
 # Makes sure what the tests and the bench need is installed: Embree 3
-# (libembree-dev, the comparison) and embree-tools (the furBall_A model).
+# (libembree-dev, the comparison), embree-tools (the furBall_A model) and
+# clang (libFuzzer).
 # As root it installs them with apt-get; otherwise it says what to run.
 # gnuplot-nox (the bench's chart) is optional and installed when possible.
 set -e
 missing=""
 [ -f /usr/include/embree3/rtcore.h ] || missing="$missing libembree-dev"
 [ -f /usr/share/doc/embree3/models/furBall_A.bin.gz ] || missing="$missing embree-tools"
+command -v clang >/dev/null 2>&1 || missing="$missing clang"   # the libFuzzer targets
 command -v gnuplot >/dev/null 2>&1 || optional="gnuplot-nox"
 [ -n "$missing$optional" ] || exit 0
 if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
