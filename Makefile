@@ -62,9 +62,9 @@ $(B)/tsan_test_threads: tests/test_threads.c hairobb.h tests/scenes.h tests/chec
 $(B)/fuzz_build: tests/fuzz_build.c hairobb.h | $(B) deps
 	$(FUZZCC) $(FUZZ) $< -o $@ $(LIBS)
 $(B)/fuzz_build_60s: $(B)/fuzz_build tests/fuzz_run.sh
-	@printf '#!/bin/sh\nexec sh tests/fuzz_run.sh $(B)/fuzz_build tests/fuzz_corpus/build 60\n' > $@ && chmod +x $@
+	@printf '#!/bin/sh\nexec sh tests/fuzz_run.sh $(B)/fuzz_build tests/fuzz_corpus/bvh_build 60\n' > $@ && chmod +x $@
 fuzz: $(B)/fuzz_build
-	sh tests/fuzz_run.sh $(B)/fuzz_build tests/fuzz_corpus/build $(FUZZ_SECONDS)
+	sh tests/fuzz_run.sh $(B)/fuzz_build tests/fuzz_corpus/bvh_build $(FUZZ_SECONDS)
 
 $(B)/test_scenes: tests/test_scenes.c tests/scenes.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
