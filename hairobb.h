@@ -1363,11 +1363,10 @@ static int hairobb__side(const hairobb__builder *b, size_t i, const hairobb__spl
    plane between its ends is not clipped (returns 0, extra unused: -1). */
 static int hairobb__clip(hairobb__builder *b, size_t i, size_t extra, const hairobb__split *split)
 {
-    float scratch[16], frame_row[3] = {0.0f, 0.0f, 0.0f}, plane, u0 = b->ranges[2 * i], u1 = b->ranges[2 * i + 1];
+    float frame_row[3] = {0.0f, 0.0f, 0.0f}, plane, u0 = b->ranges[2 * i], u1 = b->ranges[2 * i + 1];
     float lo = u0, hi = u1, c0, c1, uc;
     const float *cp = b->vertices + 4 * (size_t)b->indices[b->ids[i]];
     int iteration, k;
-    (void)scratch;
     if (split->hair_space) memcpy(frame_row, split->frame + 3 * split->axis, sizeof frame_row);
     else frame_row[split->axis] = 1.0f;
     plane = split->bin_origin + (float)(split->last_left_bin + 1) / split->bin_scale;
@@ -1450,6 +1449,13 @@ static void hairobb__partition(hairobb__builder *b, const hairobb__range *r, con
     right->begin = lo + share; right->end = end + share; right->cap = r->cap;
 }
 
+/* Node memory starts at a 64-byte boundary inside what HAIROBB_MALLOC gave
+   (bytes + 64 of it). */
+static unsigned char *hairobb__align64(unsigned char *allocation)
+{
+    return allocation + ((64 - ((uintptr_t)allocation & 63)) & 63);
+}
+
 /* Node memory grows by doubling; offsets, not pointers, survive a move. */
 static size_t hairobb__alloc_node(hairobb__builder *b, size_t bytes)
 {
@@ -1461,7 +1467,7 @@ static size_t hairobb__alloc_node(hairobb__builder *b, size_t bytes)
         while (capacity < offset + bytes) capacity *= 2;
         allocation = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(capacity + 64, b->user));
         if (!allocation) { b->error = HAIROBB_ERROR_OUT_OF_MEMORY; return 0; }
-        aligned = allocation + ((64 - ((uintptr_t)allocation & 63)) & 63);
+        aligned = hairobb__align64(allocation);
         if (b->node_bytes) memcpy(aligned, b->nodes, b->node_bytes);
         if (b->node_allocation) HAIROBB_FREE(b->node_allocation, b->user);
         b->node_allocation = allocation;
@@ -1949,17 +1955,6 @@ static void hairobb__setup_pieces(hairobb_bvh *bvh, int pieces)
     }
 }
 
-/* A copy of `bytes` bytes at `alignment` in an allocation of just that size:
-   what stays after the build. */
-static void *hairobb__shrink(void *old, size_t bytes, size_t alignment, void **allocation, void *user)
-{
-    unsigned char *raw = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(bytes + alignment, user)), *aligned;
-    if (!raw) return NULL;
-    aligned = raw + ((alignment - ((uintptr_t)raw & (alignment - 1))) & (alignment - 1));
-    memcpy(aligned, old, bytes);
-    *allocation = raw;
-    return aligned;
-}
 
 HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_count,
                              const uint32_t *indices, size_t segment_count,
@@ -2041,10 +2036,11 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     /* keep exactly what tracing needs: memory_bytes reports what stays */
     b.error = HAIROBB_ERROR_OUT_OF_MEMORY;
     if (b.node_bytes) {
-        void *allocation;
-        bvh->nodes = HAIROBB__CAST(unsigned char *, hairobb__shrink(b.nodes, b.node_bytes, 64, &allocation, b.user));
-        if (!bvh->nodes) goto failed;
+        unsigned char *allocation = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(b.node_bytes + 64, b.user));
+        if (!allocation) goto failed;
         bvh->node_allocation = allocation;
+        bvh->nodes = hairobb__align64(allocation);
+        memcpy(bvh->nodes, b.nodes, b.node_bytes);
         bvh->node_bytes = b.node_bytes;
     }
     bvh->leaf_prims = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(sizeof(uint32_t) * b.stats.leaf_references, b.user));
