@@ -10,11 +10,11 @@ LIBS      = -lm -pthread
 EMBREE    = -lembree3
 B         = build
 
-TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_unit_w8 $(B)/test_options $(B)/test_threads $(B)/test_scenes $(B)/test_simd $(B)/test_simd_w8 $(B)/test_accuracy $(B)/test_far
+TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_unit_w8 $(B)/test_options $(B)/test_threads $(B)/test_scenes $(B)/test_simd $(B)/test_simd_w8 $(B)/test_accuracy $(B)/test_far $(B)/test_hair
 # the same tests again under AddressSanitizer + UndefinedBehaviorSanitizer
 # (any report aborts the test), and the threads test under ThreadSanitizer
 SANITIZED = $(B)/asan_test_reference $(B)/asan_test_unit_w8 $(B)/asan_test_options $(B)/tsan_test_threads \
-            $(B)/fuzz_build_60s
+            $(B)/fuzz_build_60s $(B)/fuzz_hair_30s
 ASAN      = -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 TSAN      = -O1 -g -fsanitize=thread
 # libFuzzer targets (clang): 60 s in `make test`, `make fuzz` for a long run
@@ -59,12 +59,16 @@ $(B)/asan_test_options: tests/test_options.c hairobb.h tests/reference.h tests/s
 $(B)/tsan_test_threads: tests/test_threads.c hairobb.h tests/scenes.h tests/check.h | $(B)
 	$(CC) $(WARN) $(TSAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
 
-$(B)/fuzz_build: tests/fuzz_build.c hairobb.h | $(B) deps
+$(B)/fuzz_%: tests/fuzz_%.c tests/fuzz_checks.h hairobb.h | $(B) deps
 	$(FUZZCC) $(FUZZ) $< -o $@ $(LIBS)
 $(B)/fuzz_build_60s: $(B)/fuzz_build tests/fuzz_run.sh
 	@printf '#!/bin/sh\nexec sh tests/fuzz_run.sh $(B)/fuzz_build tests/fuzz_corpus/bvh_build 60\n' > $@ && chmod +x $@
-fuzz: $(B)/fuzz_build
+$(B)/fuzz_hair_30s: $(B)/fuzz_hair tests/fuzz_run.sh
+	@printf '#!/bin/sh\nexec sh tests/fuzz_run.sh $(B)/fuzz_hair tests/fuzz_corpus/hair_read 30\n' > $@ && chmod +x $@
+# long runs: FUZZ_SECONDS each
+fuzz: $(B)/fuzz_build $(B)/fuzz_hair
 	sh tests/fuzz_run.sh $(B)/fuzz_build tests/fuzz_corpus/bvh_build $(FUZZ_SECONDS)
+	sh tests/fuzz_run.sh $(B)/fuzz_hair tests/fuzz_corpus/hair_read $(FUZZ_SECONDS)
 
 $(B)/test_scenes: tests/test_scenes.c tests/scenes.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
@@ -90,6 +94,10 @@ $(B)/test_accuracy: tests/test_accuracy.c hairobb.h tests/reference.h tests/scen
 $(B)/test_far: tests/test_far.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
 
+# the .hair reader against the tests' own, bad files, a BVH from a loaded file
+$(B)/test_hair: tests/test_hair.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
+
 $(B)/bench: bench/bench.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) -DBENCH_CFLAGS='"$(BASE) $(ARCH)"' $< -o $@ $(EMBREE) -lpthread $(LIBS)
 
@@ -98,7 +106,7 @@ $(B)/bench: bench/bench.c hairobb.h tests/reference.h tests/scenes.h tests/embre
 compile-matrix: | $(B)
 	@printf '#define HAIROBB_IMPLEMENTATION\n#include "hairobb.h"\nint main(void){return 0;}\n' > $(B)/matrix.c
 	@set -e; for cc in gcc clang; do command -v $$cc >/dev/null || continue; \
-	  for flags in "" "-DHAIROBB_STATIC" "-DHAIROBB_NO_SIMD" "-mavx2" "-mavx2 -DHAIROBB_NODE_WIDTH=8" "-DHAIROBB_NO_SIMD -DHAIROBB_NODE_WIDTH=8" "-DHAIROBB_NO_THREADS"; do \
+	  for flags in "" "-DHAIROBB_STATIC" "-DHAIROBB_NO_SIMD" "-mavx2" "-mavx2 -DHAIROBB_NODE_WIDTH=8" "-DHAIROBB_NO_SIMD -DHAIROBB_NODE_WIDTH=8" "-DHAIROBB_NO_THREADS" "-DHAIROBB_NO_STDIO"; do \
 	    $$cc $(WARN) -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
 	    $$cc -x c++ -std=c++11 -Wall -Wextra -pedantic -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
 	    echo "compile-matrix: $$cc $$flags (C99 and C++11) clean"; done; done

@@ -113,6 +113,17 @@
      secondary ray starts on (unlike Embree, nothing is dropped near t = 0):
      start such rays with tnear a few radii (over |dir|) past 0.
 
+   .hair FILES
+     hairobb_hair_load(path, allocator_user, &hair) (or hairobb_hair_read
+     from memory) reads Cem Yuksel's format: the file's arrays (points with
+     radius = thickness / 2, strand lengths, colours and transparency where
+     present) and Bezier segments through the points (uniform Catmull-Rom),
+     ready for hairobb_build(hair.vertices, hair.vertex_count, hair.indices,
+     hair.segment_count, ...). Keep the hairobb_hair until hairobb_free of
+     the BVH, then hairobb_hair_free. A file whose size, counts or flags
+     disagree is HAIROBB_ERROR_INVALID_FILE; NaN, Inf or negative thickness
+     HAIROBB_ERROR_INVALID_GEOMETRY.
+
    THREAD SAFETY
      hairobb_intersect1/hairobb_occluded1 only read the BVH: any number of
      threads may trace one BVH at once. There is no global state.
@@ -123,6 +134,7 @@
      HAIROBB_ASSERT(x)       internal checks, default assert().
      HAIROBB_STATIC          make every function static to the including file.
      HAIROBB_NO_SIMD         plain C everywhere (same answers as the SIMD paths).
+     HAIROBB_NO_STDIO        leave out hairobb_hair_load (no <stdio.h>).
      HAIROBB_NO_THREADS      build on the calling thread only. Otherwise, on
                              POSIX systems, the build uses pthreads: link
                              with -pthread (glibc 2.34 and later need nothing).
@@ -165,7 +177,9 @@ typedef enum hairobb_result {
     HAIROBB_ERROR_INVALID_GEOMETRY,   /* NaN/Inf or |coordinate| > 1e18, negative radius */
     HAIROBB_ERROR_OUT_OF_MEMORY,      /* HAIROBB_MALLOC returned NULL */
     HAIROBB_ERROR_TOO_LARGE,          /* counts whose byte sizes overflow, > 2^32-1 segments */
-    HAIROBB_ERROR_CANCELLED           /* the progress callback asked to stop */
+    HAIROBB_ERROR_CANCELLED,          /* the progress callback asked to stop */
+    HAIROBB_ERROR_INVALID_FILE,       /* .hair data: bad magic, reserved flags, counts that disagree with the size */
+    HAIROBB_ERROR_IO                  /* a file could not be opened or read */
 } hairobb_result;
 
 HAIROBB_DEF const char *hairobb_result_string(hairobb_result r);
@@ -261,6 +275,40 @@ HAIROBB_DEF int hairobb_intersect1(const hairobb_bvh *bvh, const hairobb_ray *ra
 /* 1: some segment is hit in [tnear, tfar]; stops at the first one found. */
 HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray);
 
+/* Cem Yuksel's .hair files (www.cemyuksel.com/research/hairmodels): the
+   file's arrays, and Bezier segments made from them, ready for hairobb_build. */
+typedef struct hairobb_hair {
+    /* segments: a uniform Catmull-Rom spline through each strand's points
+       (end points repeated), in Bezier form; consecutive segments of a strand
+       share their end control point */
+    float *vertices;           /* vertex_count x (x, y, z, radius), 16-byte aligned */
+    size_t vertex_count;
+    uint32_t *indices;         /* segment_count first control points */
+    size_t segment_count;
+    uint32_t *segment_point;   /* segment i runs from point segment_point[i] (u = 0) to the next (u = 1) */
+    /* the file */
+    uint32_t strand_count, point_count;
+    uint32_t *strand_points;   /* points of each strand (its segments + 1) */
+    float *points;             /* point_count x (x, y, z, radius), radius = thickness / 2 */
+    float *transparency;       /* point_count values, or NULL: default_transparency everywhere */
+    float *colors;             /* point_count x (r, g, b), or NULL: default_color everywhere */
+    float default_transparency, default_color[3];
+    char info[89];             /* the header's text, NUL-terminated */
+    void *allocator_user;
+    void *allocation;          /* the one block holding every array above */
+} hairobb_hair;
+
+/* Reads .hair data from memory (size bytes; nothing of data is kept). The
+   size must be exactly what the header announces. On failure *hair is
+   zeroed and nothing is leaked. allocator_user is passed to HAIROBB_MALLOC. */
+HAIROBB_DEF hairobb_result hairobb_hair_read(const void *data, size_t size, void *allocator_user, hairobb_hair *hair);
+#ifndef HAIROBB_NO_STDIO
+/* The same from a file (HAIROBB_ERROR_IO if it cannot be opened or read). */
+HAIROBB_DEF hairobb_result hairobb_hair_load(const char *path, void *allocator_user, hairobb_hair *hair);
+#endif
+/* Frees what hairobb_hair_read/hairobb_hair_load allocated; NULL is ignored. */
+HAIROBB_DEF void hairobb_hair_free(hairobb_hair *hair);
+
 #ifdef __cplusplus
 }
 #endif
@@ -276,6 +324,9 @@ HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray
 #include <float.h>
 #include <math.h>
 #include <string.h>
+#ifndef HAIROBB_NO_STDIO
+#include <stdio.h>
+#endif
 
 #if defined(HAIROBB_MALLOC) != defined(HAIROBB_FREE)
 #error "define both HAIROBB_MALLOC and HAIROBB_FREE, or neither"
@@ -743,6 +794,8 @@ HAIROBB_DEF const char *hairobb_result_string(hairobb_result r)
     case HAIROBB_ERROR_OUT_OF_MEMORY: return "out of memory";
     case HAIROBB_ERROR_TOO_LARGE: return "input too large (size overflow or more than 2^32-1 segments)";
     case HAIROBB_ERROR_CANCELLED: return "build cancelled by the progress callback";
+    case HAIROBB_ERROR_INVALID_FILE: return "invalid .hair data (magic, reserved flags, or counts that disagree with the size)";
+    case HAIROBB_ERROR_IO: return "file could not be opened or read";
     }
     return "unknown hairobb_result";
 }
@@ -813,6 +866,269 @@ static void hairobb__segment_box(const float *cp, const float frame[9], const fl
         upper[k] = hairobb__maxf(hairobb__maxf(v[0], v[1]), hairobb__maxf(v[2], v[3])) + (row_norms ? radius * row_norms[k] : radius);
     }
 #endif
+}
+
+/* ------------------------------------------------------------------------ */
+/* Input: Cem Yuksel's .hair files                                           */
+/* ------------------------------------------------------------------------ */
+/* A 128-byte little-endian header ("HAIR", strand count, point count, array
+   flags, default segments per strand, thickness, transparency, colour, 88
+   bytes of text), then the arrays whose flags are set, in this order:
+   uint16 segments per strand, float3 points, float thickness (a diameter),
+   float transparency, float3 colours. */
+#define HAIROBB__HAIR_HEADER 128u
+#define HAIROBB__HAIR_SEGMENTS 1u
+#define HAIROBB__HAIR_POINTS 2u
+#define HAIROBB__HAIR_THICKNESS 4u
+#define HAIROBB__HAIR_TRANSPARENCY 8u
+#define HAIROBB__HAIR_COLORS 16u
+
+/* Bytes to numbers whatever the host's byte order. */
+static uint32_t hairobb__le_u32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+static float hairobb__le_float(const unsigned char *p)
+{
+    uint32_t bits = hairobb__le_u32(p);
+    float value;
+    memcpy(&value, &bits, sizeof value);
+    return value;
+}
+
+/* Where the header says each array starts, and the size it gives the whole
+   file; in 64 bits, so no count can wrap. */
+typedef struct hairobb__hair_layout {
+    uint32_t strands, points, flags, default_segments;
+    uint64_t segments_at, points_at, thickness_at, transparency_at, colors_at, size;
+} hairobb__hair_layout;
+
+static hairobb_result hairobb__hair_layout_of(const unsigned char *header, hairobb__hair_layout *l)
+{
+    uint64_t at = HAIROBB__HAIR_HEADER;
+    if (memcmp(header, "HAIR", 4) != 0) return HAIROBB_ERROR_INVALID_FILE;
+    l->strands = hairobb__le_u32(header + 4);
+    l->points = hairobb__le_u32(header + 8);
+    l->flags = hairobb__le_u32(header + 12);
+    l->default_segments = hairobb__le_u32(header + 16);
+    /* reserved bits set, or no points: not a file this reader understands */
+    if ((l->flags & ~31u) != 0 || !(l->flags & HAIROBB__HAIR_POINTS)) return HAIROBB_ERROR_INVALID_FILE;
+    l->segments_at = at;
+    if (l->flags & HAIROBB__HAIR_SEGMENTS) at += 2 * (uint64_t)l->strands;
+    l->points_at = at;
+    at += 12 * (uint64_t)l->points;
+    l->thickness_at = at;
+    if (l->flags & HAIROBB__HAIR_THICKNESS) at += 4 * (uint64_t)l->points;
+    l->transparency_at = at;
+    if (l->flags & HAIROBB__HAIR_TRANSPARENCY) at += 4 * (uint64_t)l->points;
+    l->colors_at = at;
+    if (l->flags & HAIROBB__HAIR_COLORS) at += 12 * (uint64_t)l->points;
+    l->size = at;
+    return HAIROBB_OK;
+}
+
+static uint64_t hairobb__strand_length(const unsigned char *data, const hairobb__hair_layout *l, uint32_t strand)
+{
+    const unsigned char *p = data + l->segments_at + 2 * (uint64_t)strand;
+    uint64_t segments = (l->flags & HAIROBB__HAIR_SEGMENTS) ? (uint64_t)(p[0] | p[1] << 8) : (uint64_t)l->default_segments;
+    return segments + 1;
+}
+
+/* One block holds every array; its size for the counts, or 0 if it would
+   not fit a size_t. */
+static size_t hairobb__hair_block_size(const hairobb__hair_layout *l, uint64_t vertices, uint64_t segments)
+{
+    uint64_t bytes = 16 * vertices + 32 + 8 * segments + 4 * (uint64_t)l->strands + 16 * (uint64_t)l->points;
+    if (l->flags & HAIROBB__HAIR_TRANSPARENCY) bytes += 4 * (uint64_t)l->points;
+    if (l->flags & HAIROBB__HAIR_COLORS) bytes += 12 * (uint64_t)l->points;
+    return bytes <= (uint64_t)((size_t)-1) ? (size_t)bytes : 0;
+}
+
+/* Reads point i (radius = half the thickness); 0 if it is not finite, too
+   large, or thinner than nothing. */
+static int hairobb__hair_point(const unsigned char *data, const hairobb__hair_layout *l, float default_thickness,
+                               size_t i, float point[4])
+{
+    int c;
+    float thickness = (l->flags & HAIROBB__HAIR_THICKNESS) ? hairobb__le_float(data + l->thickness_at + 4 * (uint64_t)i)
+                                                           : default_thickness;
+    for (c = 0; c < 3; ++c) point[c] = hairobb__le_float(data + l->points_at + 12 * (uint64_t)i + 4 * (uint64_t)c);
+    point[3] = 0.5f * thickness;
+    for (c = 0; c < 4; ++c)
+        if (!(fabsf(point[c]) <= HAIROBB__MAX_COORD)) return 0;
+    return point[3] >= 0.0f;
+}
+
+/* Copies count floats (little-endian bytes at `at`); 0 if one is not finite. */
+static int hairobb__hair_floats(const unsigned char *data, uint64_t at, size_t count, float *out)
+{
+    size_t i;
+    for (i = 0; i < count; ++i) {
+        out[i] = hairobb__le_float(data + at + 4 * (uint64_t)i);
+        if (!(fabsf(out[i]) <= FLT_MAX)) return 0;
+    }
+    return 1;
+}
+
+/* A strand's points p[0..n-1] as n-1 Bezier segments of the uniform
+   Catmull-Rom spline through them (p[-1] = p[0], p[n] = p[n-1]): each
+   segment interpolates its two points, tangents match at the joints. Radii
+   are clamped at 0, so r(u) >= 0 (a Bezier of non-negative radii). */
+static void hairobb__catmull_rom_strand(const float *p, size_t n, float *vertices)
+{
+    size_t i;
+    int c;
+    for (i = 0; i < n; ++i) memcpy(vertices + 12 * i, p + 4 * i, 4 * sizeof(float));
+    for (i = 0; i + 1 < n; ++i) {
+        const float *before = p + 4 * (i > 0 ? i - 1 : 0), *start = p + 4 * i, *end = p + 4 * (i + 1);
+        const float *after = p + 4 * (i + 2 < n ? i + 2 : n - 1);
+        float *inner = vertices + 12 * i + 4;
+        for (c = 0; c < 4; ++c) {
+            inner[c] = start[c] + (end[c] - before[c]) / 6.0f;
+            inner[4 + c] = end[c] - (after[c] - start[c]) / 6.0f;
+        }
+        inner[3] = hairobb__maxf(inner[3], 0.0f);
+        inner[7] = hairobb__maxf(inner[7], 0.0f);
+    }
+}
+
+HAIROBB_DEF hairobb_result hairobb_hair_read(const void *data, size_t size, void *allocator_user, hairobb_hair *hair)
+{
+    const unsigned char *bytes = HAIROBB__CAST(const unsigned char *, data);
+    hairobb__hair_layout l;
+    hairobb_result result;
+    uint64_t points_in_strands = 0, vertex_count = 0, segment_count = 0;
+    size_t block_size, point = 0, vertex = 0, segment = 0, i;
+    unsigned char *block;
+    float default_thickness;
+    uint32_t k;
+
+    if (!hair) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    memset(hair, 0, sizeof *hair);
+    if (!data) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    if (size < HAIROBB__HAIR_HEADER) return HAIROBB_ERROR_INVALID_FILE;
+    result = hairobb__hair_layout_of(bytes, &l);
+    if (result != HAIROBB_OK) return result;
+    if (l.size != (uint64_t)size) return HAIROBB_ERROR_INVALID_FILE;   /* truncated, or more than announced */
+
+    /* the strands' points must add up to the point count; without a
+       segments array that is one product, so a lying strand count costs
+       no loop */
+    if (!(l.flags & HAIROBB__HAIR_SEGMENTS) && (uint64_t)l.strands * ((uint64_t)l.default_segments + 1) != l.points)
+        return HAIROBB_ERROR_INVALID_FILE;
+    for (k = 0; k < l.strands; ++k) {
+        uint64_t n = hairobb__strand_length(bytes, &l, k);
+        points_in_strands += n;
+        if (points_in_strands > l.points) return HAIROBB_ERROR_INVALID_FILE;
+        if (n >= 2) {
+            segment_count += n - 1;
+            vertex_count += 3 * (n - 1) + 1;
+        }
+    }
+    if (points_in_strands != l.points) return HAIROBB_ERROR_INVALID_FILE;
+    if (vertex_count > 0xffffffffu) return HAIROBB_ERROR_TOO_LARGE;   /* indices are 32 bits */
+    block_size = hairobb__hair_block_size(&l, vertex_count, segment_count);
+    if (block_size == 0) return HAIROBB_ERROR_TOO_LARGE;
+
+    block = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(block_size, allocator_user));
+    if (!block) return HAIROBB_ERROR_OUT_OF_MEMORY;
+    hair->allocation = block;
+    hair->allocator_user = allocator_user;
+    /* float4 arrays first, 16-byte aligned; Embree may read 16 bytes past the
+       last vertex */
+    hair->vertices = HAIROBB__CAST(float *, HAIROBB__CAST(void *, block + ((16 - ((uintptr_t)block & 15)) & 15)));
+    hair->points = hair->vertices + 4 * vertex_count + 4;
+    hair->colors = (l.flags & HAIROBB__HAIR_COLORS) ? hair->points + 4 * (size_t)l.points : NULL;
+    hair->transparency = (l.flags & HAIROBB__HAIR_TRANSPARENCY)
+                             ? hair->points + (hair->colors ? 7 : 4) * (size_t)l.points : NULL;
+    hair->strand_points = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, hair->points + 4 * (size_t)l.points +
+                              (hair->colors ? 3 * (size_t)l.points : 0) + (hair->transparency ? (size_t)l.points : 0)));
+    hair->indices = hair->strand_points + l.strands;
+    hair->segment_point = hair->indices + segment_count;
+    hair->vertex_count = (size_t)vertex_count;
+    hair->segment_count = (size_t)segment_count;
+    hair->strand_count = l.strands;
+    hair->point_count = l.points;
+    hair->default_transparency = hairobb__le_float(bytes + 24);
+    for (k = 0; k < 3; ++k) hair->default_color[k] = hairobb__le_float(bytes + 28 + 4 * k);
+    memcpy(hair->info, bytes + 40, 88);
+    hair->info[88] = '\0';
+
+    default_thickness = hairobb__le_float(bytes + 20);
+    result = HAIROBB_ERROR_INVALID_GEOMETRY;
+    for (i = 0; i < l.points; ++i)
+        if (!hairobb__hair_point(bytes, &l, default_thickness, i, hair->points + 4 * i)) goto failed;
+    result = HAIROBB_ERROR_INVALID_FILE;
+    if (hair->transparency && !hairobb__hair_floats(bytes, l.transparency_at, l.points, hair->transparency)) goto failed;
+    if (hair->colors && !hairobb__hair_floats(bytes, l.colors_at, 3 * (size_t)l.points, hair->colors)) goto failed;
+
+    for (k = 0; k < l.strands; ++k) {
+        size_t n = (size_t)hairobb__strand_length(bytes, &l, k);
+        hair->strand_points[k] = (uint32_t)n;
+        if (n >= 2) {
+            hairobb__catmull_rom_strand(hair->points + 4 * point, n, hair->vertices + 4 * vertex);
+            for (i = 0; i + 1 < n; ++i, ++segment) {
+                hair->indices[segment] = (uint32_t)(vertex + 3 * i);
+                hair->segment_point[segment] = (uint32_t)(point + i);
+            }
+            vertex += 3 * (n - 1) + 1;
+        }
+        point += n;
+    }
+    memset(hair->vertices + 4 * vertex_count, 0, 4 * sizeof(float));   /* the padding */
+    return HAIROBB_OK;
+
+failed:
+    hairobb_hair_free(hair);
+    return result;
+}
+
+#ifndef HAIROBB_NO_STDIO
+/* The header first, so that a file of another size is an error before
+   anything of its announced size is allocated. */
+HAIROBB_DEF hairobb_result hairobb_hair_load(const char *path, void *allocator_user, hairobb_hair *hair)
+{
+    unsigned char header[HAIROBB__HAIR_HEADER], *data;
+    hairobb__hair_layout l;
+    hairobb_result result;
+    FILE *file;
+    long length;
+    if (!hair) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    memset(hair, 0, sizeof *hair);
+    if (!path) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    file = fopen(path, "rb");
+    if (!file) return HAIROBB_ERROR_IO;
+    if (fread(header, 1, sizeof header, file) != sizeof header)
+        result = ferror(file) ? HAIROBB_ERROR_IO : HAIROBB_ERROR_INVALID_FILE;   /* a directory, or too short */
+    else
+        result = hairobb__hair_layout_of(header, &l);
+    if (result == HAIROBB_OK && (fseek(file, 0, SEEK_END) != 0 || (length = ftell(file)) < 0 || fseek(file, 0, SEEK_SET) != 0))
+        result = HAIROBB_ERROR_IO;
+    else if (result == HAIROBB_OK && (uint64_t)length != l.size)
+        result = HAIROBB_ERROR_INVALID_FILE;
+    else if (result == HAIROBB_OK && l.size > (uint64_t)((size_t)-1))
+        result = HAIROBB_ERROR_TOO_LARGE;
+    if (result == HAIROBB_OK) {
+        data = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC((size_t)l.size, allocator_user));
+        if (!data)
+            result = HAIROBB_ERROR_OUT_OF_MEMORY;
+        else if (fread(data, 1, (size_t)l.size, file) != (size_t)l.size)
+            result = HAIROBB_ERROR_IO;
+        else
+            result = hairobb_hair_read(data, (size_t)l.size, allocator_user, hair);
+        if (data) HAIROBB_FREE(data, allocator_user);
+    }
+    fclose(file);
+    return result;
+}
+#endif
+
+HAIROBB_DEF void hairobb_hair_free(hairobb_hair *hair)
+{
+    if (!hair) return;
+    if (hair->allocation) HAIROBB_FREE(hair->allocation, hair->allocator_user);
+    memset(hair, 0, sizeof *hair);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -999,8 +1315,19 @@ typedef struct hairobb__split {
 
 static int hairobb__bin_of(float x, float origin, float scale)
 {
-    int bin = (int)((x - origin) * scale);
-    return bin < 0 ? 0 : bin >= HAIROBB__BINS ? HAIROBB__BINS - 1 : bin;
+    float position = (x - origin) * scale;
+    /* clamped before the conversion: a float out of int's range (or NaN)
+       converted to int is undefined */
+    if (!(position >= 1.0f)) return 0;
+    return position >= (float)(HAIROBB__BINS - 1) ? HAIROBB__BINS - 1 : (int)position;
+}
+
+/* Bins per unit of an extent, just under bins / extent so that the upper
+   end falls in the last bin; 0 (do not bin) for extents so small that the
+   scale would overflow (subnormal input found by the .hair fuzzer). */
+static float hairobb__bin_scale(int bins, float extent)
+{
+    return extent >= (float)HAIROBB__BINS * FLT_MIN ? (float)bins * (1.0f - 1.0f / 1024.0f) / extent : 0.0f;
 }
 
 /* Box of the reference at position i: its world box, or (frame given)
@@ -1086,8 +1413,7 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
         size_t bin_count[3][HAIROBB__BINS];
         int bin;
         for (axis = 0; axis < 3; ++axis) {
-            float extent = cmax[axis] - cmin[axis];
-            scale[axis] = extent > 0.0f ? (float)bins * (1.0f - 1.0f / 1024.0f) / extent : 0.0f;
+            scale[axis] = hairobb__bin_scale(bins, cmax[axis] - cmin[axis]);
             for (bin = 0; bin < bins; ++bin) {
                 hairobb__box_empty(bin_lower[axis][bin], bin_upper[axis][bin]);
                 bin_count[axis][bin] = 0;
@@ -1109,16 +1435,15 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
                                     cmin[axis], scale[axis], best);
     }
     for (axis = 0; axis < 3 && spatial_slack > 0; ++axis) {
-        float bin_lower[HAIROBB__BINS][3], bin_upper[HAIROBB__BINS][3], extent, scale;
+        float bin_lower[HAIROBB__BINS][3], bin_upper[HAIROBB__BINS][3];
+        float scale = hairobb__bin_scale(bins, bmax[axis] - bmin[axis]);
         size_t bin_count[HAIROBB__BINS], exits[HAIROBB__BINS];
         int bin;
-        extent = bmax[axis] - bmin[axis];
-        if (spatial_slack > 0 && extent > 0.0f) {
+        if (scale > 0.0f) {
             /* each reference enters the bin of its lower end and leaves by that of
                its upper end; in between, its box clipped to each bin's slab is
                what it adds there (an upper bound of its clipped curve) */
             hairobb__split before = *best;
-            scale = (float)bins * (1.0f - 1.0f / 1024.0f) / extent;
             for (bin = 0; bin < bins; ++bin) {
                 hairobb__box_empty(bin_lower[bin], bin_upper[bin]);
                 bin_count[bin] = exits[bin] = 0;

@@ -11,6 +11,7 @@
 #include <math.h>
 #define HAIROBB_IMPLEMENTATION
 #include "../hairobb.h"
+#include "fuzz_checks.h"
 
 typedef struct reader {
     const uint8_t *data;
@@ -35,12 +36,6 @@ static float read_coordinate(reader *r)
     unsigned kind = read_byte(r);
     if (kind < 224) return ((float)kind - 112.0f) / 16.0f + (float)read_byte(r) / 4096.0f;
     return read_float(r);
-}
-
-static void fail(const char *what)
-{
-    (void)what;
-    abort();    /* libFuzzer reports the input */
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -81,30 +76,20 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 
     result = hairobb_build(vertices, vertex_count, indices, segments, &options, &bvh);
     if (result != HAIROBB_OK) {
-        if (bvh) fail("a failed build returned a BVH");
-        if ((unsigned)result > HAIROBB_ERROR_CANCELLED) fail("unknown result code");
-        if (!strcmp(hairobb_result_string(result), "unknown hairobb_result")) fail("result without a message");
+        if (bvh) fuzz_fail("a failed build returned a BVH");
+        if ((unsigned)result > HAIROBB_ERROR_CANCELLED) fuzz_fail("unknown result code");
+        if (!strcmp(hairobb_result_string(result), "unknown hairobb_result")) fuzz_fail("result without a message");
     } else {
-        if (!bvh) fail("a successful build returned no BVH");
+        if (!bvh) fuzz_fail("a successful build returned no BVH");
         rays = 1 + read_byte(&r) % 32;
         for (k = 0; k < rays; ++k) {
             hairobb_ray ray;
-            hairobb_hit hit;
-            int j, hit_any, occluded;
+            int j;
             for (j = 0; j < 3; ++j) ray.org[j] = read_coordinate(&r);
             for (j = 0; j < 3; ++j) ray.dir[j] = read_coordinate(&r);
             ray.tnear = read_byte(&r) < 200 ? 0.0f : read_coordinate(&r);
             ray.tfar = read_byte(&r) < 200 ? INFINITY : read_coordinate(&r);
-            hit_any = hairobb_intersect1(bvh, &ray, &hit);
-            occluded = hairobb_occluded1(bvh, &ray);
-            if (hit_any) {
-                if (!(hit.t >= ray.tnear && hit.t <= ray.tfar) || !isfinite(hit.t)) fail("hit outside [tnear, tfar]");
-                if (!(hit.u >= 0.0f && hit.u <= 1.0f)) fail("u outside [0,1]");
-                if (hit.prim_id >= segments) fail("prim_id past the segments");
-                if (!occluded) fail("intersect1 hits where occluded1 does not");
-            } else if (hit.prim_id != HAIROBB_INVALID_ID) {
-                fail("a miss with a prim_id");
-            }
+            fuzz_check_ray(bvh, &ray, segments);
         }
         hairobb_free(bvh);
     }
