@@ -10,7 +10,7 @@ LIBS      = -lm -pthread
 EMBREE    = -lembree3
 B         = build
 
-TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_unit_w8 $(B)/test_options $(B)/test_threads $(B)/test_scenes $(B)/test_simd $(B)/test_simd_w8 $(B)/test_accuracy $(B)/test_far $(B)/test_hair
+TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_unit_w8 $(B)/test_options $(B)/test_threads $(B)/test_scenes $(B)/test_simd $(B)/test_simd_w8 $(B)/test_accuracy $(B)/test_far $(B)/test_hair $(B)/test_secondary $(B)/test_conservative
 # the same tests again under AddressSanitizer + UndefinedBehaviorSanitizer
 # (any report aborts the test), and the threads test under ThreadSanitizer
 SANITIZED = $(B)/asan_test_reference $(B)/asan_test_unit_w8 $(B)/asan_test_options $(B)/tsan_test_threads \
@@ -92,6 +92,14 @@ $(B)/test_accuracy: tests/test_accuracy.c hairobb.h tests/reference.h tests/scen
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
 
 $(B)/test_far: tests/test_far.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
+
+# traversal conservativeness: an instrumented header records the leaves reached
+$(B)/test_conservative: tests/test_conservative.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
+
+# secondary rays leaving a hit: the self-intersection rule, contact shadows
+$(B)/test_secondary: tests/test_secondary.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
 
 # the .hair reader against the tests' own, bad files, a BVH from a loaded file

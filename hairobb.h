@@ -110,8 +110,12 @@
      hairobb_hit: t, u, v as above; Ng the ribbon's unit normal facing the ray
      origin; tangent = P'(u) in world space; prim_id the segment index.
      Every hit with t in [tnear, tfar] counts, including the ribbon a
-     secondary ray starts on (unlike Embree, nothing is dropped near t = 0):
-     start such rays with tnear a few radii (over |dir|) past 0.
+     secondary ray starts on. Trace secondary rays with
+     hairobb_intersect1_from / hairobb_occluded1_from, giving the hit they
+     leave: they start at org + hit.t * dir with tnear = 0 and skip the
+     ribbon they start on, its segment and the segments joined to its ends,
+     within 2 radii (Embree drops every hit with t <= 2 r / |dir|, other
+     hairs included; here other hairs in contact still cast shadows).
 
    .hair FILES
      hairobb_hair_load(path, allocator_user, &hair) (or hairobb_hair_read
@@ -274,6 +278,18 @@ typedef struct hairobb_hit {
 HAIROBB_DEF int hairobb_intersect1(const hairobb_bvh *bvh, const hairobb_ray *ray, hairobb_hit *hit);
 /* 1: some segment is hit in [tnear, tfar]; stops at the first one found. */
 HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray);
+
+/* Secondary rays (shadow, bounce) leaving the hit `from` of an earlier ray:
+   start them at its hit point, org + from->t * dir of that ray, with
+   tnear = 0. Hits on the segment left (from->prim_id) and on the segments
+   joined to its ends (first or last control point at the same position)
+   closer than 2 * its largest radius / |dir|, plus the rounding of org,
+   are ignored: the ribbon the ray starts on, whatever way it faces the new
+   ray. Every other segment counts from tnear on, however close (contact
+   shadows between hairs stay). from == NULL: the plain functions above. */
+HAIROBB_DEF int hairobb_intersect1_from(const hairobb_bvh *bvh, const hairobb_hit *from, const hairobb_ray *ray,
+                                        hairobb_hit *hit);
+HAIROBB_DEF int hairobb_occluded1_from(const hairobb_bvh *bvh, const hairobb_hit *from, const hairobb_ray *ray);
 
 /* Cem Yuksel's .hair files (www.cemyuksel.com/research/hairmodels): the
    file's arrays, and Bezier segments made from them, ready for hairobb_build. */
@@ -765,6 +781,7 @@ typedef char hairobb__compressed_node_size[sizeof(hairobb__compressed_node) == (
 struct hairobb_bvh {
     const float *vertices;
     const uint32_t *indices;
+    size_t segment_count;
     void *allocator_user;
     void *node_allocation;            /* what HAIROBB_MALLOC returned */
     unsigned char *nodes;             /* 64-byte aligned inside node_allocation */
@@ -2380,6 +2397,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     hairobb__pad_box(bvh->lower, bvh->upper);
     bvh->vertices = vertices;
     bvh->indices = indices;
+    bvh->segment_count = segment_count;
     bvh->allocator_user = b.user;
     bvh->precision = opt.precision;
     hairobb__setup_pieces(bvh, (int)opt.curve_pieces);
@@ -2459,6 +2477,12 @@ typedef struct hairobb__ray_state {
     float dir_length, inv_dir_length;
     uint32_t hit_prim;
     float hit_u;
+    /* secondary rays: hits before skip_t on the segment left and on those
+       joined to its ends (positions of its first and last control point)
+       are ignored; skip_t = 0 for other rays */
+    float skip_t;
+    uint32_t skip_prim;
+    float skip_first[3], skip_last[3];
 } hairobb__ray_state;
 
 #define HAIROBB__TINY_DIR 1e-18f
@@ -2493,6 +2517,7 @@ static int hairobb__ray_setup(hairobb__ray_state *rs, const hairobb_ray *ray)
     rs->tfar = ray->tfar;
     rs->hit_prim = HAIROBB_INVALID_ID;
     rs->hit_u = 0.0f;
+    rs->skip_t = 0.0f;
     rs->dir_length = sqrtf(hairobb__dot3(ray->dir, ray->dir));
     if (!(rs->dir_length > 0.0f) || !(rs->dir_length < INFINITY) || !(rs->tnear <= rs->tfar)) return 0;
     rs->inv_dir_length = 1.0f / rs->dir_length;
@@ -3045,12 +3070,39 @@ static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state
     return hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit);
 }
 
+/* Instrumented builds (tests/test_conservative.c) see each segment of each
+   leaf a ray reaches; nonzero skips its intersection, so no hit shortens
+   the ray and the traversal reaches every leaf the ray's boxes lead to. */
+#ifndef HAIROBB__LEAF_VISIT
+#define HAIROBB__LEAF_VISIT(rs, prim) 0
+#endif
+
+/* The segment a secondary ray leaves, or one joined to its ends. */
+static int hairobb__skipped(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint32_t prim)
+{
+    const float *cp = bvh->vertices + 4 * (size_t)bvh->indices[prim];
+    return prim == rs->skip_prim ||
+           (cp[0] == rs->skip_last[0] && cp[1] == rs->skip_last[1] && cp[2] == rs->skip_last[2]) ||
+           (cp[12] == rs->skip_first[0] && cp[13] == rs->skip_first[1] && cp[14] == rs->skip_first[2]);
+}
+
 static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint64_t ref, int any_hit)
 {
     size_t first = (size_t)(ref >> 8), count = (size_t)((ref >> 4) & 15u), i;
-    int found = 0;
+    int found = 0, hit;
     for (i = 0; i < count; ++i) {
-        if (hairobb__intersect_segment(bvh, rs, bvh->leaf_prims[first + i], any_hit)) {
+        uint32_t prim = bvh->leaf_prims[first + i];
+        if (HAIROBB__LEAF_VISIT(rs, prim)) continue;
+        if (rs->skip_t > 0.0f && hairobb__skipped(bvh, rs, prim)) {
+            /* this segment alone is tested from skip_t on */
+            float tnear = rs->tnear;
+            rs->tnear = hairobb__maxf(tnear, rs->skip_t);
+            hit = rs->tnear <= rs->tfar && hairobb__intersect_segment(bvh, rs, prim, any_hit);
+            rs->tnear = tnear;
+        } else {
+            hit = hairobb__intersect_segment(bvh, rs, prim, any_hit);
+        }
+        if (hit) {
             found = 1;
             if (any_hit) return 1;
         }
@@ -3112,22 +3164,54 @@ static void hairobb__fill_hit(const hairobb_bvh *bvh, const hairobb__ray_state *
     hit->prim_id = rs->hit_prim;
 }
 
-HAIROBB_DEF int hairobb_intersect1(const hairobb_bvh *bvh, const hairobb_ray *ray, hairobb_hit *hit)
+/* A ray leaving the hit `from` (NULL: none): the band it skips is twice the
+   segment's largest radius, the ribbon's reach whichever way it faces the
+   new ray, plus 8 float ulps of the origin for the rounding of the hit
+   point the caller computed. */
+static int hairobb__ray_setup_from(hairobb__ray_state *rs, const hairobb_bvh *bvh, const hairobb_hit *from,
+                                   const hairobb_ray *ray)
+{
+    const float *cp;
+    float max_r, magnitude;
+    if (!hairobb__ray_setup(rs, ray)) return 0;
+    if (!from || from->prim_id >= bvh->segment_count) return 1;
+    cp = bvh->vertices + 4 * (size_t)bvh->indices[from->prim_id];
+    max_r = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
+    magnitude = hairobb__maxf(hairobb__maxf(fabsf(ray->org[0]), fabsf(ray->org[1])), fabsf(ray->org[2]));
+    rs->skip_t = (2.0f * max_r + magnitude * (8.0f * FLT_EPSILON)) * rs->inv_dir_length;
+    rs->skip_prim = from->prim_id;
+    memcpy(rs->skip_first, cp, sizeof rs->skip_first);
+    memcpy(rs->skip_last, cp + 12, sizeof rs->skip_last);
+    return 1;
+}
+
+HAIROBB_DEF int hairobb_intersect1_from(const hairobb_bvh *bvh, const hairobb_hit *from, const hairobb_ray *ray,
+                                        hairobb_hit *hit)
 {
     hairobb__ray_state rs;
     if (!hit) return 0;
     hit->prim_id = HAIROBB_INVALID_ID;
-    if (!bvh || !ray || !hairobb__ray_setup(&rs, ray)) return 0;
+    if (!bvh || !ray || !hairobb__ray_setup_from(&rs, bvh, from, ray)) return 0;
     if (!hairobb__traverse(bvh, &rs, 0)) return 0;
     hairobb__fill_hit(bvh, &rs, hit);
     return 1;
 }
 
-HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray)
+HAIROBB_DEF int hairobb_occluded1_from(const hairobb_bvh *bvh, const hairobb_hit *from, const hairobb_ray *ray)
 {
     hairobb__ray_state rs;
-    if (!bvh || !ray || !hairobb__ray_setup(&rs, ray)) return 0;
+    if (!bvh || !ray || !hairobb__ray_setup_from(&rs, bvh, from, ray)) return 0;
     return hairobb__traverse(bvh, &rs, 1);
+}
+
+HAIROBB_DEF int hairobb_intersect1(const hairobb_bvh *bvh, const hairobb_ray *ray, hairobb_hit *hit)
+{
+    return hairobb_intersect1_from(bvh, NULL, ray, hit);
+}
+
+HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray)
+{
+    return hairobb_occluded1_from(bvh, NULL, ray);
 }
 
 #endif /* HAIROBB_IMPLEMENTATION_DONE */
