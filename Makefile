@@ -10,10 +10,10 @@ LIBS      = -lm -pthread
 EMBREE    = -lembree3
 B         = build
 
-TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_unit_w8 $(B)/test_options $(B)/test_threads $(B)/test_scenes $(B)/test_simd $(B)/test_simd_w8 $(B)/test_accuracy $(B)/test_far $(B)/test_hair $(B)/test_secondary $(B)/test_conservative
+TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_unit_w8 $(B)/test_options $(B)/test_threads $(B)/test_scenes $(B)/test_simd $(B)/test_simd_w8 $(B)/test_accuracy $(B)/test_far $(B)/test_stress $(B)/test_hair $(B)/test_secondary $(B)/test_conservative
 # the same tests again under AddressSanitizer + UndefinedBehaviorSanitizer
 # (any report aborts the test), and the threads test under ThreadSanitizer
-SANITIZED = $(B)/asan_test_reference $(B)/asan_test_unit_w8 $(B)/asan_test_options $(B)/tsan_test_threads \
+SANITIZED = $(B)/asan_test_reference $(B)/asan_test_unit_w8 $(B)/asan_test_options $(B)/asan_test_stress $(B)/tsan_test_threads \
             $(B)/fuzz_build_60s $(B)/fuzz_hair_30s
 ASAN      = -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 TSAN      = -O1 -g -fsanitize=thread
@@ -56,6 +56,8 @@ $(B)/asan_test_unit_w8: tests/test_unit.c hairobb.h tests/reference.h tests/scen
 	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) -DHAIROBB_NODE_WIDTH=8 $< -o $@ $(LIBS)
 $(B)/asan_test_options: tests/test_options.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
 	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
+$(B)/asan_test_stress: tests/test_stress.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
+	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
 $(B)/tsan_test_threads: tests/test_threads.c hairobb.h tests/scenes.h tests/check.h | $(B)
 	$(CC) $(WARN) $(TSAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
 
@@ -93,6 +95,10 @@ $(B)/test_accuracy: tests/test_accuracy.c hairobb.h tests/reference.h tests/scen
 
 $(B)/test_far: tests/test_far.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
+
+# numerical stress: radii, degenerate segments, hard rays, joints
+$(B)/test_stress: tests/test_stress.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
 
 # traversal conservativeness: an instrumented header records the leaves reached
 $(B)/test_conservative: tests/test_conservative.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
