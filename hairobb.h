@@ -2855,29 +2855,20 @@ static float hairobb__solve_bracketed(const hairobb__ray_poly *c, float lo, floa
     return u;
 }
 
-static int hairobb__sign_change(float fa, float fb)
+/* A strict sign change: an exact zero is tried as a root of its own. */
+static int hairobb__crosses(float fa, float fb)
 {
-    return (fa <= 0.0f && fb >= 0.0f) || (fa >= 0.0f && fb <= 0.0f);
+    return (fa < 0.0f && fb > 0.0f) || (fa > 0.0f && fb < 0.0f);
 }
 
-/* Roots of f in [a, b], each tried as a hit. A sign change brackets one.
-   Without one, two roots can hide where f dips through zero; halving the
-   interval `depth` times exposes such dips down to a quarter of a piece,
-   below that they are looked for around the extremum where f' changes sign. */
-static int hairobb__refine_range(hairobb__ray_state *rs, const hairobb__ray_poly *c, uint32_t prim,
-                                 float a, float b, float fa, float fb, float da, float db, int depth)
+/* Roots of f in [a, b] without a sign change across it: two can hide where
+   f dips through zero; they are looked for around the extremum, where f'
+   changes sign. */
+static int hairobb__refine_dip(hairobb__ray_state *rs, const hairobb__ray_poly *c, uint32_t prim,
+                               float a, float b, float fa, float fb, float da, float db)
 {
     float lo = a, hi = b, middle, f_middle, d_middle;
     int found = 0, iteration;
-    if (hairobb__sign_change(fa, fb))
-        return hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, a, b, fa, fb));
-    if (depth > 0) {
-        middle = 0.5f * (a + b);
-        f_middle = hairobb__ribbon_f(c, middle, &d_middle);
-        found |= hairobb__refine_range(rs, c, prim, a, middle, fa, f_middle, da, d_middle, depth - 1);
-        found |= hairobb__refine_range(rs, c, prim, middle, b, f_middle, fb, d_middle, db, depth - 1);
-        return found;
-    }
     if ((da < 0.0f) == (db < 0.0f)) return 0;
     for (iteration = 0; iteration < 20; ++iteration) {
         middle = 0.5f * (lo + hi);
@@ -2890,6 +2881,40 @@ static int hairobb__refine_range(hairobb__ray_state *rs, const hairobb__ray_poly
     found |= hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, a, middle, fa, f_middle));
     found |= hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, middle, b, f_middle, fb));
     return found;
+}
+
+/* Whether the segment's first (end 0) or last (end 1) control point is where
+   the segment before (after) it in index order ends (begins): a joint of a
+   strand stored in order, as every renderer's buffers and .hair files are. */
+static int hairobb__joint_at(const hairobb_bvh *bvh, uint32_t prim, int end)
+{
+    const float *p = bvh->vertices + 4 * (size_t)bvh->indices[prim] + 12 * end, *q;
+    if (end ? (size_t)prim + 1 >= bvh->segment_count : prim == 0) return 0;
+    q = bvh->vertices + 4 * (size_t)bvh->indices[end ? prim + 1 : prim - 1] + 12 * (1 - end);
+    return p[0] == q[0] && p[1] == q[1] && p[2] == q[2];
+}
+
+/* A root of f within rounding of a segment's end has no reliable sign: at
+   a strand's joint, each segment may compute its root just past its own end
+   and the ray would pass between them. At a joint, the end is tried as a
+   root where |f| there is within f's rounding: f = x x' + y y' with x, y,
+   x', y' each off by about 16 ulps of the control points' distance from
+   the ray origin. Free ends (tips) take only the part of that rounding that
+   does not grow with P2' (a root at the end where P' = 0, as when control
+   points repeat): their ribbon ends where it is defined to. The end's
+   values come from its control points (end 0: points 0, 1; end 1: 3, 2). */
+static int hairobb__try_end(const hairobb_bvh *bvh, hairobb__ray_state *rs, const hairobb__ray_curve *c,
+                            const hairobb__ray_poly *poly, uint32_t prim, int end)
+{
+    int at = 3 * end, next = 1 + end;
+    float x = c->x[at], y = c->y[at], dx = 3.0f * (c->x[next] - x), dy = 3.0f * (c->y[next] - y), f = x * dx + y * dy;
+    float distance = hairobb__maxf(hairobb__maxf(hairobb__maxf(fabsf(x), fabsf(y)), fabsf(c->z[at])),
+                                   hairobb__maxf(hairobb__maxf(fabsf(c->x[next]), fabsf(c->y[next])), fabsf(c->z[next])));
+    float slack = distance * (16.0f * FLT_EPSILON), at_tip = slack * (fabsf(x) + fabsf(y));
+    if (!(fabsf(f) <= at_tip) &&
+        !(fabsf(f) <= at_tip + slack * (fabsf(dx) + fabsf(dy)) && hairobb__joint_at(bvh, prim, end)))
+        return 0;
+    return hairobb__try_hit(rs, poly, prim, (float)end);
 }
 
 /* hairobb__ribbon_f and its derivative at 8 parameters at once, rounded as
@@ -2911,12 +2936,15 @@ static void hairobb__ribbon_f_v8(const hairobb__ray_poly *c, const float u_lanes
     hairobb__v8_store(f, hairobb__v8_add(hairobb__v8_mul(x, dx), hairobb__v8_mul(y, dy)));
 }
 
-/* hairobb__refine_range(a, b, ..., depth 2), with f and f' at the ends,
-   the middle and the quarters evaluated at once up front. */
+/* Roots of f in the piece [a, b], each tried as a hit: f and f' at its
+   ends, middle and quarters evaluated at once; in each quarter a sign change
+   brackets a root, without one a dip may hide two, and exact zeros are
+   roots. One root a quarter at most is found; several in one piece (bends,
+   cusps) each have theirs. */
 static int hairobb__refine_piece(hairobb__ray_state *rs, const hairobb__ray_poly *c, uint32_t prim, float a, float b)
 {
     float u[8], f[8], d[8];
-    int found = 0, half, k;
+    int found = 0, k;
     u[0] = a;
     u[4] = b;
     u[2] = 0.5f * (a + b);
@@ -2924,20 +2952,14 @@ static int hairobb__refine_piece(hairobb__ray_state *rs, const hairobb__ray_poly
     u[3] = 0.5f * (u[2] + b);
     u[5] = u[6] = u[7] = b;
     hairobb__ribbon_f_v8(c, u, f, d);
-    if (hairobb__sign_change(f[0], f[4]))
-        return hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, a, b, f[0], f[4]));
-    for (half = 0; half < 4; half += 2) {
-        if (hairobb__sign_change(f[half], f[half + 2])) {
-            found |= hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, u[half], u[half + 2], f[half], f[half + 2]));
-            continue;
-        }
-        /* the quarters: depth 0, which finds nothing without a sign change
-           of f or of f' */
-        for (k = half; k < half + 2; ++k) {
-            if (hairobb__sign_change(f[k], f[k + 1]) || (d[k] < 0.0f) != (d[k + 1] < 0.0f))
-                found |= hairobb__refine_range(rs, c, prim, u[k], u[k + 1], f[k], f[k + 1], d[k], d[k + 1], 0);
-        }
+    for (k = 0; k < 4; ++k) {
+        if (f[k] == 0.0f) found |= hairobb__try_hit(rs, c, prim, u[k]);
+        if (hairobb__crosses(f[k], f[k + 1]))
+            found |= hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, u[k], u[k + 1], f[k], f[k + 1]));
+        else if ((d[k] < 0.0f) != (d[k + 1] < 0.0f))
+            found |= hairobb__refine_dip(rs, c, prim, u[k], u[k + 1], f[k], f[k + 1], d[k], d[k + 1]);
     }
+    if (f[4] == 0.0f) found |= hairobb__try_hit(rs, c, prim, u[4]);
     return found;
 }
 
@@ -3026,6 +3048,8 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
             } else {
                 if (!have_poly) { hairobb__to_power_form(c, &poly); have_poly = 1; }
                 found |= hairobb__refine_piece(rs, &poly, prim, a, b);
+                if (k == 0) found |= hairobb__try_end(bvh, rs, c, &poly, prim, 0);
+                if (k == bvh->pieces - 1) found |= hairobb__try_end(bvh, rs, c, &poly, prim, 1);
             }
             if (found && any_hit) return 1;
         }
