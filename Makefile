@@ -1,5 +1,7 @@
 # hairobb: `make test` runs every test, `make bench` the benchmark on the
 # built-in fur scene, `make examples` builds the examples.
+# the many test programs build on every core; the tests run one after another
+MAKEFLAGS += -j$(shell nproc 2>/dev/null || echo 2)
 CC       ?= cc
 ARCH     ?= -march=native
 # no FMA contraction: the SIMD and plain C paths must round identically

@@ -48,7 +48,8 @@
      r(u) be the segment's position and radius and P2 = (x, y) the projection.
      The ribbon is hit at u in [0,1] where dot(P2(u), P2'(u)) = 0 and
      |P2(u)| <= r(u); t = z(u)/|dir| (org + t*dir is on the curve's centre line).
-     The first hit is the smallest t in [tnear, tfar] over all segments.
+     The first hit is the smallest t in [tnear, tfar] over all segments
+     (of segments hit at the same t, the one with the smallest index).
      v in [-1,1] is the signed position across the ribbon:
        v = dot(cross(T, X - C), dir/|dir|) / (|T_perp| r(u)),
      T = P'(u), C = P(u), X = org + t*dir, T_perp = T without its component
@@ -2813,10 +2814,12 @@ static float hairobb__ribbon_f(const hairobb__ray_poly *c, float u, float *deriv
 }
 
 /* Records the hit if the ribbon point (x, y) covers the ray axis within
-   radius r and t is in [tnear, tfar]: the nearest hit so far. */
+   radius r and t is in [tnear, tfar]: the nearest hit so far. Of two
+   segments hit at the same t the smaller index wins, whatever the tree. */
 static int hairobb__accept(hairobb__ray_state *rs, uint32_t prim, float u, float t, float x, float y, float r)
 {
     if (!(x * x + y * y <= r * r) || !(t >= rs->tnear) || !(t <= rs->tfar)) return 0;
+    if (t == rs->tfar && prim > rs->hit_prim) return 0;
     rs->tfar = t;
     rs->hit_prim = prim;
     rs->hit_u = u;
