@@ -12,7 +12,7 @@ LIBS      = -lm -pthread
 EMBREE    = -lembree3
 B         = build
 
-TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_unit_w8 $(B)/test_options $(B)/test_threads $(B)/test_scenes $(B)/test_simd $(B)/test_simd_w8 $(B)/test_accuracy $(B)/test_far $(B)/test_stress $(B)/test_hair $(B)/test_secondary $(B)/test_conservative
+TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_unit_w8 $(B)/test_options $(B)/test_threads $(B)/test_scenes $(B)/test_simd $(B)/test_simd_w8 $(B)/test_accuracy $(B)/test_far $(B)/test_stress $(B)/test_hair $(B)/test_secondary $(B)/test_conservative $(B)/test_bases $(B)/test_filter
 # the same tests again under AddressSanitizer + UndefinedBehaviorSanitizer
 # (any report aborts the test), and the threads test under ThreadSanitizer
 SANITIZED = $(B)/asan_test_reference $(B)/asan_test_unit_w8 $(B)/asan_test_options $(B)/asan_test_stress $(B)/tsan_test_threads \
@@ -104,6 +104,14 @@ $(B)/test_stress: tests/test_stress.c hairobb.h tests/reference.h tests/scenes.h
 
 # traversal conservativeness: an instrumented header records the leaves reached
 $(B)/test_conservative: tests/test_conservative.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
+
+# curve bases against Embree's flat curves of each basis and the reference
+$(B)/test_bases: tests/test_bases.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
+
+# the any-hit filter against the reference
+$(B)/test_filter: tests/test_filter.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
 
 # secondary rays leaving a hit: the self-intersection rule, contact shadows

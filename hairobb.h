@@ -40,7 +40,7 @@
      MEMORY LIFETIME: the BVH keeps pointers to the caller's vertex and index
      arrays and reads them while tracing (it copies nothing the caller already
      holds). They must stay alive and unchanged until hairobb_free; to change
-     the hair, build again.
+     the hair, build again. (Other curve bases, see `basis`, are copied.)
 
    THE SURFACE
      Each segment is a ray-facing ribbon (Embree's "flat" curve). In ray space
@@ -50,6 +50,10 @@
      |P2(u)| <= r(u); t = z(u)/|dir| (org + t*dir is on the curve's centre line).
      The first hit is the smallest t in [tnear, tfar] over all segments
      (of segments hit at the same t, the one with the smallest index).
+     Where float rounding leaves a ray at a smooth joint of a strand (the
+     next segment in index order starts where one ends, tangents parallel)
+     with no root in either segment, the joint point counts as a hit on
+     the segment whose end it is: strands are watertight at their joints.
      v in [-1,1] is the signed position across the ribbon:
        v = dot(cross(T, X - C), dir/|dir|) / (|T_perp| r(u)),
      T = P'(u), C = P(u), X = org + t*dir, T_perp = T without its component
@@ -106,6 +110,22 @@
                              calling thread only; at most 256. Every thread
                              count builds the same tree (the top levels on
                              the calling thread, then independent subtrees).
+     basis, tangents         HAIROBB_BASIS_BEZIER (default) reads 4 control
+                             points from indices[i]. _BSPLINE, _CATMULL_ROM
+                             (4 points), _HERMITE (2 points, their
+                             derivatives at the same indices of `tangents`)
+                             and _LINEAR (2 points) follow Embree's curve
+                             types of those names; the build converts each
+                             segment exactly to Bezier form (a basis change:
+                             the same cubic, the same u) into 68 bytes per
+                             segment it owns, so then the caller's arrays
+                             may go after the build. Radii a conversion
+                             takes below 0 are clamped to 0.
+     hit_filter, _user       hit_filter(user, ray, hit) for each hit found
+                             in [tnear, tfar] (nearer than the best so far
+                             for intersect1, any for occluded1), on the
+                             tracing thread, before it is taken: 0 ignores
+                             it. NULL (default) costs nothing measurable.
 
    HITS
      hairobb_hit: t, u, v as above; Ng the ribbon's unit normal facing the ray
@@ -178,7 +198,7 @@ extern "C" {
 typedef enum hairobb_result {
     HAIROBB_OK = 0,
     HAIROBB_ERROR_INVALID_ARGUMENT,   /* NULL pointer, zero segments, bad option value */
-    HAIROBB_ERROR_INDEX_OUT_OF_RANGE, /* indices[i] + 3 >= vertex_count */
+    HAIROBB_ERROR_INDEX_OUT_OF_RANGE, /* indices[i] + 3 >= vertex_count (+ 1 for Hermite and linear) */
     HAIROBB_ERROR_INVALID_GEOMETRY,   /* NaN/Inf or |coordinate| > 1e18, negative radius */
     HAIROBB_ERROR_OUT_OF_MEMORY,      /* HAIROBB_MALLOC returned NULL */
     HAIROBB_ERROR_TOO_LARGE,          /* counts whose byte sizes overflow, > 2^32-1 segments */
@@ -220,6 +240,24 @@ typedef enum hairobb_switch {
    returning nonzero cancels the build (HAIROBB_ERROR_CANCELLED). */
 typedef int (*hairobb_progress_fn)(void *user, float fraction);
 
+/* How the control points of segment i are read, from vertex indices[i] on
+   (Embree's conventions for its curve types of the same names). */
+typedef enum hairobb_basis {
+    HAIROBB_BASIS_BEZIER = 0,   /* 4 points: the cubic Bezier (default) */
+    HAIROBB_BASIS_BSPLINE,      /* 4 points: the uniform cubic B-spline segment */
+    HAIROBB_BASIS_CATMULL_ROM,  /* 4 points: the uniform Catmull-Rom segment from the 2nd to the 3rd */
+    HAIROBB_BASIS_HERMITE,      /* 2 points and their derivatives (options.tangents) */
+    HAIROBB_BASIS_LINEAR        /* 2 points: a straight segment */
+} hairobb_basis;
+
+struct hairobb_ray;
+struct hairobb_hit;
+/* An any-hit filter: called for each hit a ray finds before it is taken
+   (transparent hair, shadow rays through opacity); nonzero takes it, 0
+   ignores it and the ray goes on. ray is the caller's (a renderer can keep
+   its own data around it). */
+typedef int (*hairobb_filter_fn)(void *user, const struct hairobb_ray *ray, const struct hairobb_hit *hit);
+
 typedef struct hairobb_build_options {
     hairobb_node_policy nodes;
     hairobb_obb_layout obb_layout;
@@ -235,6 +273,10 @@ typedef struct hairobb_build_options {
     hairobb_progress_fn progress;    /* NULL: none; called on the calling thread only */
     void *progress_user;
     unsigned threads;                /* 0 = one per core; 1 = the calling thread only; at most 256 */
+    hairobb_basis basis;             /* how vertices and indices describe segments */
+    const float *tangents;           /* HAIROBB_BASIS_HERMITE: 4 floats per vertex, dP/du and dr/du */
+    hairobb_filter_fn hit_filter;    /* NULL: every hit counts */
+    void *hit_filter_user;
 } hairobb_build_options;
 
 typedef struct hairobb_bvh hairobb_bvh;
@@ -780,9 +822,12 @@ typedef char hairobb__compressed_obb_node_size[sizeof(hairobb__compressed_obb_no
 typedef char hairobb__compressed_node_size[sizeof(hairobb__compressed_node) == (HAIROBB__W == 8 ? 160 : 96) ? 1 : -1];
 
 struct hairobb_bvh {
-    const float *vertices;
+    const float *vertices;            /* Bezier control points: the caller's, or curves */
     const uint32_t *indices;
     size_t segment_count;
+    void *curves;                     /* segments of other bases converted to Bezier, owned */
+    hairobb_filter_fn hit_filter;
+    void *hit_filter_user;
     void *allocator_user;
     void *node_allocation;            /* what HAIROBB_MALLOC returned */
     unsigned char *nodes;             /* 64-byte aligned inside node_allocation */
@@ -807,7 +852,7 @@ HAIROBB_DEF const char *hairobb_result_string(hairobb_result r)
     switch (r) {
     case HAIROBB_OK: return "ok";
     case HAIROBB_ERROR_INVALID_ARGUMENT: return "invalid argument (NULL pointer, zero segments or bad option)";
-    case HAIROBB_ERROR_INDEX_OUT_OF_RANGE: return "segment index out of range (index + 3 >= vertex count)";
+    case HAIROBB_ERROR_INDEX_OUT_OF_RANGE: return "segment index out of range (its last control point past the vertices)";
     case HAIROBB_ERROR_INVALID_GEOMETRY: return "invalid geometry (NaN, infinite or huge coordinate, or negative radius)";
     case HAIROBB_ERROR_OUT_OF_MEMORY: return "out of memory";
     case HAIROBB_ERROR_TOO_LARGE: return "input too large (size overflow or more than 2^32-1 segments)";
@@ -818,26 +863,70 @@ HAIROBB_DEF const char *hairobb_result_string(hairobb_result r)
     return "unknown hairobb_result";
 }
 
-static hairobb_result hairobb__validate(const float *vertices, size_t vertex_count,
-                                        const uint32_t *indices, size_t segment_count)
+/* Control points a segment of the basis reads from indices[i] on. */
+static size_t hairobb__basis_points(hairobb_basis basis)
+{
+    return basis == HAIROBB_BASIS_HERMITE || basis == HAIROBB_BASIS_LINEAR ? 2 : 4;
+}
+
+/* points per segment from indices[i]; tangents (Hermite) checked alike. */
+static hairobb_result hairobb__validate(const float *vertices, size_t vertex_count, const uint32_t *indices,
+                                        size_t segment_count, size_t points, const float *tangents)
 {
     size_t i, k;
     if (segment_count > 0xffffffffu || vertex_count > (size_t)-1 / (4 * sizeof(float)))
         return HAIROBB_ERROR_TOO_LARGE;
     for (i = 0; i < segment_count; ++i) {
-        if (vertex_count < 4 || indices[i] > vertex_count - 4) return HAIROBB_ERROR_INDEX_OUT_OF_RANGE;
+        if (vertex_count < points || indices[i] > vertex_count - points) return HAIROBB_ERROR_INDEX_OUT_OF_RANGE;
     }
     for (i = 0; i < segment_count; ++i) {
-        const float *cp = vertices + 4 * (size_t)indices[i];
-        for (k = 0; k < 16; ++k) {
+        const float *cp = vertices + 4 * (size_t)indices[i], *tp = tangents ? tangents + 4 * (size_t)indices[i] : NULL;
+        for (k = 0; k < 4 * points; ++k) {
             /* the negated test also rejects NaN */
             if (!(fabsf(cp[k]) <= HAIROBB__MAX_COORD)) return HAIROBB_ERROR_INVALID_GEOMETRY;
+            if (tp && !(fabsf(tp[k]) <= HAIROBB__MAX_COORD)) return HAIROBB_ERROR_INVALID_GEOMETRY;
         }
-        for (k = 3; k < 16; k += 4) {
+        for (k = 3; k < 4 * points; k += 4) {
             if (cp[k] < 0.0f) return HAIROBB_ERROR_INVALID_GEOMETRY;
         }
     }
     return HAIROBB_OK;
+}
+
+/* The Bezier control points (x, y, z, r each) of a segment given in another
+   basis: p its points (4, or 2 for Hermite and linear), t the Hermite
+   derivatives. The same cubic, so the same curve and the same u; radii
+   that overshoot below 0 (Catmull-Rom, Hermite) are clamped. */
+static void hairobb__to_bezier(hairobb_basis basis, const float *p, const float *t, float b[16])
+{
+    int c;
+    for (c = 0; c < 4; ++c) {
+        const float *q = p + c;
+        if (basis == HAIROBB_BASIS_BSPLINE) {
+            b[c] = (q[0] + 4.0f * q[4] + q[8]) / 6.0f;
+            b[4 + c] = (2.0f * q[4] + q[8]) / 3.0f;
+            b[8 + c] = (q[4] + 2.0f * q[8]) / 3.0f;
+            b[12 + c] = (q[4] + 4.0f * q[8] + q[12]) / 6.0f;
+        } else if (basis == HAIROBB_BASIS_CATMULL_ROM) {
+            b[c] = q[4];
+            b[4 + c] = q[4] + (q[8] - q[0]) / 6.0f;
+            b[8 + c] = q[8] - (q[12] - q[4]) / 6.0f;
+            b[12 + c] = q[8];
+        } else if (basis == HAIROBB_BASIS_HERMITE) {
+            b[c] = q[0];
+            b[4 + c] = q[0] + t[c] / 3.0f;
+            b[8 + c] = q[4] - t[4 + c] / 3.0f;
+            b[12 + c] = q[4];
+        } else if (basis == HAIROBB_BASIS_LINEAR) {
+            b[c] = q[0];
+            b[4 + c] = (2.0f * q[0] + q[4]) / 3.0f;
+            b[8 + c] = (q[0] + 2.0f * q[4]) / 3.0f;
+            b[12 + c] = q[4];
+        } else {
+            b[c] = q[0]; b[4 + c] = q[4]; b[8 + c] = q[8]; b[12 + c] = q[12];
+        }
+    }
+    for (c = 3; c < 16; c += 4) b[c] = hairobb__maxf(b[c], 0.0f);
 }
 
 /* Box of a segment in a rotated frame (rows of frame are the new axes).
@@ -996,19 +1085,15 @@ static int hairobb__hair_floats(const unsigned char *data, uint64_t at, size_t c
 static void hairobb__catmull_rom_strand(const float *p, size_t n, float *vertices)
 {
     size_t i;
-    int c;
-    for (i = 0; i < n; ++i) memcpy(vertices + 12 * i, p + 4 * i, 4 * sizeof(float));
     for (i = 0; i + 1 < n; ++i) {
-        const float *before = p + 4 * (i > 0 ? i - 1 : 0), *start = p + 4 * i, *end = p + 4 * (i + 1);
-        const float *after = p + 4 * (i + 2 < n ? i + 2 : n - 1);
-        float *inner = vertices + 12 * i + 4;
-        for (c = 0; c < 4; ++c) {
-            inner[c] = start[c] + (end[c] - before[c]) / 6.0f;
-            inner[4 + c] = end[c] - (after[c] - start[c]) / 6.0f;
-        }
-        inner[3] = hairobb__maxf(inner[3], 0.0f);
-        inner[7] = hairobb__maxf(inner[7], 0.0f);
+        float around[16], bezier[16];
+        memcpy(around, p + 4 * (i > 0 ? i - 1 : 0), 4 * sizeof(float));
+        memcpy(around + 4, p + 4 * i, 8 * sizeof(float));
+        memcpy(around + 12, p + 4 * (i + 2 < n ? i + 2 : n - 1), 4 * sizeof(float));
+        hairobb__to_bezier(HAIROBB_BASIS_CATMULL_ROM, around, NULL, bezier);
+        memcpy(vertices + 12 * i, bezier, 12 * sizeof(float));   /* the end point is the next one's start */
     }
+    memcpy(vertices + 12 * (n - 1), p + 4 * (n - 1), 4 * sizeof(float));
 }
 
 HAIROBB_DEF hairobb_result hairobb_hair_read(const void *data, size_t size, void *allocator_user, hairobb_hair *hair)
@@ -2322,18 +2407,19 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
         (unsigned)opt.spatial_splits > HAIROBB_OFF || (unsigned)opt.clustering > HAIROBB_OFF ||
         !(opt.spatial_split_budget >= 0.0f && opt.spatial_split_budget <= 4.0f) ||
         opt.max_leaf_size > HAIROBB__MAX_LEAF || opt.hair_space_candidates > HAIROBB__MAX_CANDIDATES ||
-        opt.curve_pieces > HAIROBB__MAX_PIECES || opt.threads > 256)
+        opt.curve_pieces > HAIROBB__MAX_PIECES || opt.threads > 256 || (unsigned)opt.basis > HAIROBB_BASIS_LINEAR ||
+        (opt.basis == HAIROBB_BASIS_HERMITE) != (opt.tangents != NULL))
         return HAIROBB_ERROR_INVALID_ARGUMENT;
     /* the defaults the bench chose (see README, "Ablation") */
     if (opt.obb_layout == HAIROBB_OBB_DEFAULT) opt.obb_layout = HAIROBB_OBB_COMPRESSED_PER_CHILD;
     if (opt.spatial_splits == HAIROBB_AUTO) opt.spatial_splits = HAIROBB_OFF;
     if (opt.clustering == HAIROBB_AUTO) opt.clustering = HAIROBB_OFF;
     if (opt.spatial_split_budget == 0.0f) opt.spatial_split_budget = 0.25f;
-    result = hairobb__validate(vertices, vertex_count, indices, segment_count);
+    result = hairobb__validate(vertices, vertex_count, indices, segment_count, hairobb__basis_points(opt.basis), opt.tangents);
     if (result != HAIROBB_OK) return result;
 
     extra = opt.spatial_splits == HAIROBB_ON ? (size_t)((double)segment_count * opt.spatial_split_budget) : 0;
-    if (segment_count > (size_t)-1 / 2 - extra ||
+    if (segment_count > (size_t)-1 / 2 - extra || segment_count > (size_t)-1 / (16 * sizeof(float) + sizeof(uint32_t)) ||
         segment_count + extra > (size_t)-1 / (6 * sizeof(float)) || segment_count + extra > 0xffffffffu)
         return HAIROBB_ERROR_TOO_LARGE;
     memset(&b, 0, sizeof b);
@@ -2355,6 +2441,20 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     b.frame_boxes = HAIROBB__CAST(float *, HAIROBB_MALLOC(6 * sizeof(float) * b.capacity, b.user));
     b.error = HAIROBB_ERROR_OUT_OF_MEMORY;
     if (!bvh || !b.ids || !b.ranges || !b.world_boxes || !b.frame_boxes) goto failed;
+    if (opt.basis != HAIROBB_BASIS_BEZIER) {
+        /* Bezier control points, 16 floats per segment, then the indices */
+        float *curves = HAIROBB__CAST(float *, HAIROBB_MALLOC((16 * sizeof(float) + sizeof(uint32_t)) * segment_count, b.user));
+        uint32_t *curve_indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, curves + 16 * segment_count));
+        if (!curves) goto failed;
+        bvh->curves = curves;
+        for (i = 0; i < segment_count; ++i) {
+            size_t at = 4 * (size_t)indices[i];
+            hairobb__to_bezier(opt.basis, vertices + at, opt.tangents ? opt.tangents + at : NULL, curves + 16 * i);
+            curve_indices[i] = (uint32_t)(4 * i);
+        }
+        b.vertices = vertices = curves;
+        b.indices = indices = curve_indices;
+    }
     b.error = HAIROBB_OK;
 
     hairobb__box_empty(bvh->lower, bvh->upper);
@@ -2399,6 +2499,8 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     bvh->vertices = vertices;
     bvh->indices = indices;
     bvh->segment_count = segment_count;
+    bvh->hit_filter = opt.hit_filter;
+    bvh->hit_filter_user = opt.hit_filter_user;
     bvh->allocator_user = b.user;
     bvh->precision = opt.precision;
     hairobb__setup_pieces(bvh, (int)opt.curve_pieces);
@@ -2409,6 +2511,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     return HAIROBB_OK;
 
 failed:
+    if (bvh && bvh->curves) HAIROBB_FREE(bvh->curves, b.user);
     if (bvh && bvh->node_allocation) HAIROBB_FREE(bvh->node_allocation, b.user);
     if (b.node_allocation) HAIROBB_FREE(b.node_allocation, b.user);
     if (b.ids) HAIROBB_FREE(b.ids, b.user);
@@ -2426,6 +2529,7 @@ HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh)
     void *user;
     if (!bvh) return;
     user = bvh->allocator_user;
+    if (bvh->curves) HAIROBB_FREE(bvh->curves, user);
     if (bvh->node_allocation) HAIROBB_FREE(bvh->node_allocation, user);
     if (bvh->leaf_prims) HAIROBB_FREE(bvh->leaf_prims, user);
     HAIROBB_FREE(bvh, user);
@@ -2434,7 +2538,8 @@ HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh)
 HAIROBB_DEF size_t hairobb_memory_bytes(const hairobb_bvh *bvh)
 {
     if (!bvh) return 0;
-    return sizeof *bvh + (bvh->node_allocation ? bvh->node_bytes + 64 : 0) + sizeof(uint32_t) * bvh->leaf_prim_count;
+    return sizeof *bvh + (bvh->node_allocation ? bvh->node_bytes + 64 : 0) + sizeof(uint32_t) * bvh->leaf_prim_count +
+           (bvh->curves ? (16 * sizeof(float) + sizeof(uint32_t)) * bvh->segment_count : 0);
 }
 
 HAIROBB_DEF void hairobb_get_stats(const hairobb_bvh *bvh, hairobb_stats *stats)
@@ -2471,6 +2576,10 @@ typedef struct hairobb__slab_ray {
 
 /* Everything one ray needs, computed once per ray. */
 typedef struct hairobb__ray_state {
+    hairobb_filter_fn hit_filter;
+    int any_hit;                /* occluded1 */
+    const hairobb_bvh *bvh;     /* set with a hit filter only: what it is called with */
+    const hairobb_ray *ray;     /* the caller's */
     float org[3], dir[3];
     float tnear, tfar;          /* tfar shrinks to the nearest hit so far */
     hairobb__slab_ray world;    /* for AABB nodes */
@@ -2507,10 +2616,12 @@ static void hairobb__slab_setup(hairobb__slab_ray *slab, const float org[3], con
     }
 }
 
-static int hairobb__ray_setup(hairobb__ray_state *rs, const hairobb_ray *ray)
+static int hairobb__ray_setup(hairobb__ray_state *rs, const hairobb_bvh *bvh, const hairobb_ray *ray)
 {
     int k;
     float unit[3];
+    rs->hit_filter = bvh->hit_filter;
+    if (rs->hit_filter) { rs->bvh = bvh; rs->ray = ray; }
     memcpy(rs->org, ray->org, sizeof rs->org);
     memcpy(rs->dir, ray->dir, sizeof rs->dir);
     hairobb__slab_setup(&rs->world, ray->org, ray->dir);
@@ -2669,6 +2780,7 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
     float stack_dist[HAIROBB__STACK];
     int sp = 0, found = 0;
     uint64_t ref = bvh->root;
+    rs->any_hit = any_hit;
     for (;;) {
         unsigned type = HAIROBB__REF_TYPE(ref);
         if (type != HAIROBB__REF_LEAF && type != HAIROBB__REF_EMPTY) {
@@ -2816,10 +2928,21 @@ static float hairobb__ribbon_f(const hairobb__ray_poly *c, float u, float *deriv
 /* Records the hit if the ribbon point (x, y) covers the ray axis within
    radius r and t is in [tnear, tfar]: the nearest hit so far. Of two
    segments hit at the same t the smaller index wins, whatever the tree. */
+/* out of line: accept stays small where no filter is set */
+#if defined(__GNUC__) || defined(__clang__)
+static int hairobb__hit_filtered_out(const hairobb__ray_state *rs, uint32_t prim, float u, float t) __attribute__((noinline, cold));
+#endif
+static int hairobb__hit_filtered_out(const hairobb__ray_state *rs, uint32_t prim, float u, float t);
+
 static int hairobb__accept(hairobb__ray_state *rs, uint32_t prim, float u, float t, float x, float y, float r)
 {
     if (!(x * x + y * y <= r * r) || !(t >= rs->tnear) || !(t <= rs->tfar)) return 0;
     if (t == rs->tfar && prim > rs->hit_prim) return 0;
+    if (rs->hit_filter) {
+        /* occluded1 takes one hit: the filter is shown none after it */
+        if (rs->any_hit && rs->hit_prim != HAIROBB_INVALID_ID) return 0;
+        if (hairobb__hit_filtered_out(rs, prim, u, t)) return 0;
+    }
     rs->tfar = t;
     rs->hit_prim = prim;
     rs->hit_u = u;
@@ -2887,14 +3010,27 @@ static int hairobb__refine_dip(hairobb__ray_state *rs, const hairobb__ray_poly *
 }
 
 /* Whether the segment's first (end 0) or last (end 1) control point is where
-   the segment before (after) it in index order ends (begins): a joint of a
-   strand stored in order, as every renderer's buffers and .hair files are. */
+   the segment before (after) it in index order ends (begins), the two
+   tangents there parallel within 1e-3: a smooth joint of a strand stored in
+   order, as every renderer's buffers and .hair files are. (At a kink the
+   ribbons part by more than rounding, as the definition has them.) */
 static int hairobb__joint_at(const hairobb_bvh *bvh, uint32_t prim, int end)
 {
     const float *p = bvh->vertices + 4 * (size_t)bvh->indices[prim] + 12 * end, *q;
+    float a[3], b[3], cross[3];
+    int k;
     if (end ? (size_t)prim + 1 >= bvh->segment_count : prim == 0) return 0;
     q = bvh->vertices + 4 * (size_t)bvh->indices[end ? prim + 1 : prim - 1] + 12 * (1 - end);
-    return p[0] == q[0] && p[1] == q[1] && p[2] == q[2];
+    if (!(p[0] == q[0] && p[1] == q[1] && p[2] == q[2])) return 0;
+    /* both tangents pointing along the strand, away from the joint's first segment */
+    for (k = 0; k < 3; ++k) {
+        a[k] = end ? p[k] - p[k - 4] : p[k + 4] - p[k];
+        b[k] = end ? q[k + 4] - q[k] : q[k] - q[k - 4];
+    }
+    cross[0] = a[1] * b[2] - a[2] * b[1];
+    cross[1] = a[2] * b[0] - a[0] * b[2];
+    cross[2] = a[0] * b[1] - a[1] * b[0];
+    return hairobb__dot3(a, b) > 0.0f && hairobb__dot3(cross, cross) <= 1e-6f * hairobb__dot3(a, a) * hairobb__dot3(b, b);
 }
 
 /* A root of f within rounding of a segment's end has no reliable sign: at
@@ -3154,13 +3290,15 @@ static void hairobb__bezier_v4(hairobb__v4 p0, hairobb__v4 p1, hairobb__v4 p2, h
                              hairobb__v4_mul(hairobb__v4_set1(u * u * u), p3));
 }
 
-/* Hit attributes, computed once for the final hit only. */
-static void hairobb__fill_hit(const hairobb_bvh *bvh, const hairobb__ray_state *rs, hairobb_hit *hit)
+/* Hit attributes of the hit at u, t on segment prim: computed once for the
+   final hit, and for each one a hit filter is shown. */
+static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint32_t prim, float u, float t,
+                            hairobb_hit *hit)
 {
-    const float *cp = bvh->vertices + 4 * (size_t)bvh->indices[rs->hit_prim];
+    const float *cp = bvh->vertices + 4 * (size_t)bvh->indices[prim];
     hairobb__ray_curve c;
     hairobb__v4 x4, y4, z4, r4, value, d1;
-    float u = rs->hit_u, at[4], tangent_at[4], tangent_xy[2], x, y, r, tlen2, along, n[3], nlen;
+    float at[4], tangent_at[4], tangent_xy[2], x, y, r, tlen2, along, n[3], nlen;
     const float *unit_dir = rs->frame + 6;
     int k;
     hairobb__bezier_v4(hairobb__v4_load(cp), hairobb__v4_load(cp + 4), hairobb__v4_load(cp + 8), hairobb__v4_load(cp + 12),
@@ -3186,9 +3324,16 @@ static void hairobb__fill_hit(const hairobb_bvh *bvh, const hairobb__ray_state *
     for (k = 0; k < 3; ++k) n[k] = -unit_dir[k] + (tlen2 > 0.0f ? along * hit->tangent[k] / tlen2 : 0.0f);
     nlen = sqrtf(hairobb__dot3(n, n));
     for (k = 0; k < 3; ++k) hit->Ng[k] = nlen > 0.0f ? n[k] / nlen : -unit_dir[k];
-    hit->t = rs->tfar;
+    hit->t = t;
     hit->u = u;
-    hit->prim_id = rs->hit_prim;
+    hit->prim_id = prim;
+}
+
+static int hairobb__hit_filtered_out(const hairobb__ray_state *rs, uint32_t prim, float u, float t)
+{
+    hairobb_hit hit;
+    hairobb__hit_at(rs->bvh, rs, prim, u, t, &hit);
+    return !rs->hit_filter(rs->bvh->hit_filter_user, rs->ray, &hit);
 }
 
 /* A ray leaving the hit `from` (NULL: none): the band it skips is twice the
@@ -3200,7 +3345,7 @@ static int hairobb__ray_setup_from(hairobb__ray_state *rs, const hairobb_bvh *bv
 {
     const float *cp;
     float max_r, magnitude;
-    if (!hairobb__ray_setup(rs, ray)) return 0;
+    if (!hairobb__ray_setup(rs, bvh, ray)) return 0;
     if (!from || from->prim_id >= bvh->segment_count) return 1;
     cp = bvh->vertices + 4 * (size_t)bvh->indices[from->prim_id];
     max_r = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
@@ -3220,7 +3365,7 @@ HAIROBB_DEF int hairobb_intersect1_from(const hairobb_bvh *bvh, const hairobb_hi
     hit->prim_id = HAIROBB_INVALID_ID;
     if (!bvh || !ray || !hairobb__ray_setup_from(&rs, bvh, from, ray)) return 0;
     if (!hairobb__traverse(bvh, &rs, 0)) return 0;
-    hairobb__fill_hit(bvh, &rs, hit);
+    hairobb__hit_at(bvh, &rs, rs.hit_prim, rs.hit_u, rs.tfar, hit);
     return 1;
 }
 

@@ -26,7 +26,12 @@
 
 enum {
     EMB_FLAT_BEZIER = 0,  /* RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE: ray-facing ribbon */
-    EMB_ROUND_BEZIER = 1  /* RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE: swept sphere */
+    EMB_ROUND_BEZIER = 1, /* RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE: swept sphere */
+    /* ray-facing ribbons in the other bases (emb_build_curves) */
+    EMB_FLAT_BSPLINE = 2,
+    EMB_FLAT_CATMULL_ROM = 3,
+    EMB_FLAT_HERMITE = 4, /* needs tangents */
+    EMB_FLAT_LINEAR = 5
 };
 
 typedef struct emb_scene {
@@ -78,30 +83,29 @@ static inline void emb_free(emb_scene *e)
 }
 
 /* Builds an Embree scene over the caller's buffers (shared, not copied).
-   type: EMB_FLAT_BEZIER or EMB_ROUND_BEZIER; tessellation_rate: 0 = Embree's
+   type: EMB_*; tangents: for EMB_FLAT_HERMITE only; tessellation_rate: 0 = Embree's
    default, else rtcSetGeometryTessellationRate (flat curves); threads: 0 =
    all cores, else "threads=N". Build quality medium (Embree's default), no
    scene flags. memory_bytes (optional) = bytes Embree allocated during
    rtcCommitScene, net of what it freed; build_seconds (optional) = wall time
    of rtcCommitScene. Returns NULL on failure, after Embree's message has been
    printed to stderr. */
-static inline emb_scene *emb_build(const float *vertices, size_t vertex_count, const uint32_t *indices,
-                                   size_t segment_count, int type, int tessellation_rate, int threads,
-                                   size_t *memory_bytes, double *build_seconds)
+static inline emb_scene *emb_build_curves(const float *vertices, size_t vertex_count, const uint32_t *indices,
+                                          size_t segment_count, int type, const float *tangents, int tessellation_rate,
+                                          int threads, size_t *memory_bytes, double *build_seconds)
 {
+    static const enum RTCGeometryType types[] = {
+        RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE, RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE, RTC_GEOMETRY_TYPE_FLAT_BSPLINE_CURVE,
+        RTC_GEOMETRY_TYPE_FLAT_CATMULL_ROM_CURVE, RTC_GEOMETRY_TYPE_FLAT_HERMITE_CURVE, RTC_GEOMETRY_TYPE_FLAT_LINEAR_CURVE};
     if (memory_bytes)
         *memory_bytes = 0;
     if (build_seconds)
         *build_seconds = 0.0;
-    enum RTCGeometryType geometry_type;
-    if (type == EMB_FLAT_BEZIER)
-        geometry_type = RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE;
-    else if (type == EMB_ROUND_BEZIER)
-        geometry_type = RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE;
-    else {
-        fprintf(stderr, "emb_build: unknown curve type %d\n", type);
+    if (type < 0 || type > EMB_FLAT_LINEAR || (type == EMB_FLAT_HERMITE) != (tangents != NULL)) {
+        fprintf(stderr, "emb_build: unknown curve type %d (or tangents for the wrong type)\n", type);
         return NULL;
     }
+    enum RTCGeometryType geometry_type = types[type];
 
     emb_scene *e = (emb_scene *)calloc(1, sizeof *e);
     if (!e)
@@ -132,6 +136,9 @@ static inline emb_scene *emb_build(const float *vertices, size_t vertex_count, c
                                4 * sizeof(float), vertex_count);
     rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, (void *)indices, 0,
                                sizeof(uint32_t), segment_count);
+    if (tangents)
+        rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_TANGENT, 0, RTC_FORMAT_FLOAT4, (void *)tangents, 0,
+                                   4 * sizeof(float), vertex_count);
     if (tessellation_rate > 0)
         rtcSetGeometryTessellationRate(geometry, (float)tessellation_rate);
     rtcCommitGeometry(geometry);
@@ -153,6 +160,19 @@ static inline emb_scene *emb_build(const float *vertices, size_t vertex_count, c
     if (build_seconds)
         *build_seconds = seconds;
     return e;
+}
+
+/* Bezier curves (flat or round): emb_build_curves without tangents. */
+static inline emb_scene *emb_build(const float *vertices, size_t vertex_count, const uint32_t *indices,
+                                   size_t segment_count, int type, int tessellation_rate, int threads,
+                                   size_t *memory_bytes, double *build_seconds)
+{
+    if (type != EMB_FLAT_BEZIER && type != EMB_ROUND_BEZIER) {
+        fprintf(stderr, "emb_build: unknown curve type %d\n", type);
+        return NULL;
+    }
+    return emb_build_curves(vertices, vertex_count, indices, segment_count, type, NULL, tessellation_rate, threads,
+                            memory_bytes, build_seconds);
 }
 
 static inline void emb_init_ray(struct RTCRay *ray, const float org[3], float tnear, const float dir[3], float tfar)

@@ -540,7 +540,7 @@ static long points_outside(const tree_walk *w, size_t n, long *missing, long *po
 static int hits_at(const hairobb_bvh *bvh, const hairobb_ray *ray, uint32_t prim, float t, size_t n)
 {
     hairobb__ray_state rs;
-    hairobb__ray_setup(&rs, ray);
+    hairobb__ray_setup(&rs, bvh, ray);
     return prim < n && hairobb__intersect_segment(bvh, &rs, prim, 0) && rs.tfar == t;
 }
 
@@ -703,7 +703,7 @@ static void test_bounds_and_traversal(void)
             hairobb__ray_state rs;
             uint32_t p;
             int brute = 0, got = hairobb_intersect1(bvh, &ray, &hit);
-            hairobb__ray_setup(&rs, &ray);
+            hairobb__ray_setup(&rs, bvh, &ray);
             for (p = 0; p < n; ++p) brute |= hairobb__intersect_segment(bvh, &rs, p, 0);
             if (brute != got || (got && (hit.t != rs.tfar || (hit.prim_id != rs.hit_prim && !hits_at(bvh, &ray, hit.prim_id, hit.t, n)))))
                 ++mismatches;
@@ -869,7 +869,7 @@ static void test_degenerate_trees(void)
             ray.org[0] = scene != 1 ? 0.02f * (rnd() - 0.5f) : 20.0f * rnd();
             ray.org[1] = 0.9f * rnd();
             got = hairobb_intersect1(bvh, &ray, &hit);
-            hairobb__ray_setup(&rs, &ray);
+            hairobb__ray_setup(&rs, bvh, &ray);
             for (p = 0; p < n; ++p) brute |= hairobb__intersect_segment(bvh, &rs, p, 0);
             if (brute != got || (got && hit.t != rs.tfar) || hairobb_occluded1(bvh, &ray) != got) ++mismatches;
             hits += got;
