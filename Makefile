@@ -135,16 +135,28 @@ compile-matrix: | $(B)
 	    $$cc -x c++ -std=c++11 -Wall -Wextra -pedantic -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
 	    echo "compile-matrix: $$cc $$flags (C99 and C++11) clean"; done; done
 
-test: deps $(TESTS) $(SANITIZED) compile-matrix examples
-	@sh tests/run_all.sh $(TESTS) $(SANITIZED)
+test: deps $(TESTS) $(SANITIZED) compile-matrix examples $(B)/run_examples
+	@sh tests/run_all.sh $(TESTS) $(SANITIZED) $(B)/run_examples
 
 bench: $(B)/bench
 	$(B)/bench
 
-examples: $(B)/minimal
+examples: $(B)/minimal $(B)/render $(B)/embree_swap
 
 $(B)/minimal: examples/minimal.c hairobb.h | $(B)
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
+
+# the renderer writes its PNG with stb_image_write.h (libstb-dev)
+$(B)/render: examples/render.c hairobb.h | $(B) deps
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
+
+$(B)/embree_swap: examples/embree_swap.c hairobb.h | $(B) deps
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
+
+# `make test` runs the examples too (a few seconds): minimal, a 160x160
+# render of the built-in fur, embree_swap
+$(B)/run_examples: tests/run_examples.sh $(B)/minimal $(B)/render $(B)/embree_swap
+	@printf '#!/bin/sh\nexec sh tests/run_examples.sh $(B)\n' > $@ && chmod +x $@
 
 clean:
 	rm -rf $(B)

@@ -1,7 +1,7 @@
 #!/bin/sh
 # Makes sure what the tests and the bench need is installed: Embree 3
-# (libembree-dev, the comparison), embree-tools (the furBall_A model) and
-# clang (libFuzzer).
+# (libembree-dev, the comparison), embree-tools (the furBall_A model),
+# clang (libFuzzer) and libstb-dev (stb_image_write.h, the render example).
 # As root it installs them with apt-get; otherwise it says what to run.
 # gnuplot-nox (the bench's chart) is optional and installed when possible.
 set -e
@@ -9,6 +9,7 @@ missing=""
 [ -f /usr/include/embree3/rtcore.h ] || missing="$missing libembree-dev"
 [ -f /usr/share/doc/embree3/models/furBall_A.bin.gz ] || missing="$missing embree-tools"
 command -v clang >/dev/null 2>&1 || missing="$missing clang"   # the libFuzzer targets
+[ -f /usr/include/stb/stb_image_write.h ] || missing="$missing libstb-dev"   # examples/render.c
 command -v gnuplot >/dev/null 2>&1 || optional="gnuplot-nox"
 [ -n "$missing$optional" ] || exit 0
 if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
