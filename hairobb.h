@@ -130,6 +130,7 @@
    HITS
      hairobb_hit: t, u, v as above; Ng the ribbon's unit normal facing the ray
      origin; tangent = P'(u) in world space; prim_id the segment index.
+     (Embree's flat curves report v in [0, 1] and the tangent as Ng.)
      Every hit with t in [tnear, tfar] counts, including the ribbon a
      secondary ray starts on. Trace secondary rays with
      hairobb_intersect1_from / hairobb_occluded1_from, giving the hit they
@@ -340,7 +341,8 @@ typedef struct hairobb_hair {
     /* segments: a uniform Catmull-Rom spline through each strand's points
        (end points repeated), in Bezier form; consecutive segments of a strand
        share their end control point */
-    float *vertices;           /* vertex_count x (x, y, z, radius), 16-byte aligned */
+    float *vertices;           /* vertex_count x (x, y, z, radius), 16-byte aligned, then 16
+                                  bytes of zeros (Embree reads past the last vertex) */
     size_t vertex_count;
     uint32_t *indices;         /* segment_count first control points */
     size_t segment_count;

@@ -123,14 +123,20 @@ typedef struct variant {
        their "errors" measure the difference of surfaces, not accuracy. */
     int accuracy_comparable;
     int on_chart;        /* a point of the run time against error chart */
+    unsigned build_threads; /* hairobb: 0 = every core */
+    int hit_filter;      /* hairobb: a hit filter that takes every hit (what a set filter costs) */
 } variant;
 
 #define HAIROBB_ROW(key, label, nodes, layout, spatial, cluster, precision, pieces, on_chart) \
     {key, label, LIB_HAIROBB, HAIROBB_NODES_##nodes, HAIROBB_##layout, HAIROBB_PRECISION_##precision, pieces, \
-     HAIROBB_##spatial, HAIROBB_##cluster, 0, 0, 1, on_chart}
+     HAIROBB_##spatial, HAIROBB_##cluster, 0, 0, 1, on_chart, 0, 0}
+/* the defaults built on one thread (the build's speed-up), or with a filter */
+#define HAIROBB_DEFAULTS_ROW(key, label, build_threads, hit_filter) \
+    {key, label, LIB_HAIROBB, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 8, HAIROBB_AUTO, HAIROBB_AUTO, \
+     0, 0, 1, 0, build_threads, hit_filter}
 #define EMBREE_ROW(key, label, type, rate, comparable, on_chart) \
     {key, label, LIB_EMBREE, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 0, HAIROBB_AUTO, HAIROBB_AUTO, \
-     type, rate, comparable, on_chart}
+     type, rate, comparable, on_chart, 0, 0}
 static const variant all_variants[] = {
     /* precision points: exact and pieces-only intersectors, 4 to 16 pieces */
     HAIROBB_ROW("default", "hairobb default", MIXED, OBB_DEFAULT, AUTO, AUTO, EXACT, 8, 1),
@@ -149,6 +155,8 @@ static const variant all_variants[] = {
     /* other node layouts: one float rotation per node, the paper's compressed node (one byte rotation) */
     HAIROBB_ROW("shared", "hairobb shared rot.", MIXED, OBB_SHARED_ROTATION, OFF, OFF, EXACT, 8, 0),
     HAIROBB_ROW("compressed-shared", "hairobb compr. shared", MIXED, OBB_COMPRESSED, OFF, OFF, EXACT, 8, 0),
+    HAIROBB_DEFAULTS_ROW("build-1t", "hairobb built on 1t", 1, 0),
+    HAIROBB_DEFAULTS_ROW("filter", "hairobb + hit filter", 0, 1),
     EMBREE_ROW("embree-r4", "Embree flat r4", EMB_FLAT_BEZIER, 4, 1, 1),
     EMBREE_ROW("embree-r8", "Embree flat r8", EMB_FLAT_BEZIER, 8, 1, 1),
     EMBREE_ROW("embree-r16", "Embree flat r16", EMB_FLAT_BEZIER, 16, 1, 1),
@@ -168,9 +176,9 @@ enum { ABLATION_ROWS = 9 };
 /* Named groups for --variants; "mixed" is the default variant by another name. */
 static const struct { const char *name, *members; } variant_groups[] = {
     {"all", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
-            "spatial-compressed-cluster,shared,compressed-shared,embree-r4,embree-r8,embree-r16,embree-round"},
+            "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,embree-r4,embree-r8,embree-r16,embree-round"},
     {"hairobb", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
-                "spatial-compressed-cluster,shared,compressed-shared"},
+                "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter"},
     {"embree", "embree-r4,embree-r8,embree-r16,embree-round"},
     {"precision", "default,exact4,exact16,pieces4,pieces8,pieces16"},
     {"ablation", "aabb,obb,mixed-uncompressed,spatial,spatial-compressed,spatial-compressed-cluster,shared,compressed-shared,default"},
@@ -711,10 +719,19 @@ typedef struct built_accel {
     tracer tracer;
 } built_accel;
 
+/* Takes every hit: what calling a filter costs, without changing a hit. */
+static int take_every_hit(void *user, const hairobb_ray *ray, const hairobb_hit *hit)
+{
+    (void)user; (void)ray; (void)hit;
+    return 1;
+}
+
 static hairobb_bvh *build_hairobb(const hair_scene *s, const variant *v, double *seconds)
 {
     hairobb_build_options build_options;
     memset(&build_options, 0, sizeof build_options);
+    build_options.threads = v->build_threads;
+    build_options.hit_filter = v->hit_filter ? take_every_hit : NULL;
     build_options.nodes = v->nodes;
     build_options.obb_layout = v->obb_layout;
     build_options.precision = v->precision;
@@ -1291,7 +1308,8 @@ static void print_help(void)
            "  --variants LIST     variants or groups (default all):\n"
            "                      hairobb: default (= mixed), exact4, exact16, pieces4, pieces8, pieces16,\n"
            "                        aabb, obb, mixed-uncompressed, spatial, spatial-compressed,\n"
-           "                        spatial-compressed-cluster, shared, compressed-shared\n"
+           "                        spatial-compressed-cluster, shared, compressed-shared,\n"
+           "                        build-1t (defaults built on 1 thread), filter (a hit filter taking every hit)\n"
            "                      Embree: embree-r4, embree-r8, embree-r16 (flat), embree-round\n"
            "                      groups: all, hairobb, embree, precision, ablation\n"
            "  --passes N          timed passes per measurement, median reported (default %d, 3..64)\n"
