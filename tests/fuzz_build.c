@@ -1,7 +1,8 @@
-/* fuzz_build.c - libFuzzer target: arbitrary bytes become build options,
-   control points (any float, NaN and Inf included), segment indices (any
-   value, past the end included) and rays. hairobb_build must return one of
-   its codes and, on success, traced hits must be sane: t finite and in
+/* fuzz_build.c - libFuzzer target: arbitrary bytes become build options
+   (the curve basis too), control points (any float, NaN and Inf included),
+   segment indices (any value, past the end included) and rays.
+   hairobb_build must return one of its codes and, on success, traced hits
+   must be sane: t finite and in
    [tnear, tfar], u in [0,1], prim_id a segment, occluded1 true wherever
    intersect1 hits. Build with clang -fsanitize=fuzzer,address,undefined
    (see `make fuzz`); leaks are LeakSanitizer's to find. */
@@ -46,7 +47,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     hairobb_bvh *bvh = NULL;
     hairobb_result result;
     size_t segments, vertex_count, i;
-    float *vertices;
+    float *vertices, *tangents = NULL;
     uint32_t *indices;
     unsigned rays, k;
 
@@ -73,6 +74,15 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         unsigned pick = read_byte(&r);
         indices[i] = pick < 250 ? (uint32_t)(4 * i) : (uint32_t)(pick == 255 ? 0xfffffffeu : vertex_count - 3 + (pick - 250));
     }
+    /* the curve basis from the last byte (the stream's order stays as the
+       seeds were written); Hermite tangents: differences of the vertices */
+    options.basis = (hairobb_basis)(size > 0 ? data[size - 1] % 5 : 0);
+    if (options.basis == HAIROBB_BASIS_HERMITE) {
+        tangents = (float *)malloc(sizeof(float) * 4 * (vertex_count + 1));
+        if (!tangents) { free(vertices); free(indices); return 0; }
+        for (i = 0; i < 4 * vertex_count; ++i) tangents[i] = vertices[(i + 4) % (4 * vertex_count)] - vertices[i];
+        options.tangents = tangents;
+    }
 
     result = hairobb_build(vertices, vertex_count, indices, segments, &options, &bvh);
     if (result != HAIROBB_OK) {
@@ -94,6 +104,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         hairobb_free(bvh);
     }
     free(vertices);
+    free(tangents);
     free(indices);
     return 0;
 }
