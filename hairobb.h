@@ -125,8 +125,10 @@
                              in [tnear, tfar] (nearer than the best so far
                              for intersect1, any for occluded1), on the
                              tracing thread, before it is taken: 0 ignores
-                             it. NULL (default): +0.4-0.5% instructions
-                             per ray, below timing noise (callgrind, bench).
+                             it. A ray within rounding of a strand's joint
+                             may show it the joint on both segments. NULL
+                             (default): +0.4-0.5% instructions per ray,
+                             below timing noise (callgrind, bench).
 
    HITS
      hairobb_hit: t, u, v as above; Ng the ribbon's unit normal facing the ray
