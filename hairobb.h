@@ -922,13 +922,11 @@ static void hairobb__to_bezier(hairobb_basis basis, const float *p, const float 
             b[4 + c] = q[0] + t[c] / 3.0f;
             b[8 + c] = q[4] - t[4 + c] / 3.0f;
             b[12 + c] = q[4];
-        } else if (basis == HAIROBB_BASIS_LINEAR) {
+        } else {   /* linear (Bezier input is used as it is) */
             b[c] = q[0];
             b[4 + c] = (2.0f * q[0] + q[4]) / 3.0f;
             b[8 + c] = (q[0] + 2.0f * q[4]) / 3.0f;
             b[12 + c] = q[4];
-        } else {
-            b[c] = q[0]; b[4 + c] = q[4]; b[8 + c] = q[8]; b[12 + c] = q[12];
         }
     }
     for (c = 3; c < 16; c += 4) b[c] = hairobb__maxf(b[c], 0.0f);
