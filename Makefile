@@ -77,19 +77,21 @@ fuzz: $(B)/fuzz_build $(B)/fuzz_hair
 $(B)/test_scenes: tests/test_scenes.c tests/scenes.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
 
-# the same tracing code compiled three ways (plain C, SSE only, AVX) for each
-# node width: simd_<path>_w<width>.o, the width fixed so the trees match
-SIMD_FLAGS_plain = -DHAIROBB_NO_SIMD
-SIMD_FLAGS_sse   = -msse4.1 -mno-avx
-SIMD_FLAGS_avx   = -mavx2
+# the same tracing code compiled four ways (plain C, SSE4.1, AVX2, and the
+# x86-64 baseline that dispatches to AVX2 at run time) for each node width:
+# simd_<path>_w<width>.o, the width fixed so the trees match
+SIMD_FLAGS_plain    = -DHAIROBB_NO_SIMD
+SIMD_FLAGS_sse      = -msse4.1 -mno-avx
+SIMD_FLAGS_avx      = -mavx2
+SIMD_FLAGS_dispatch =
 simd_path  = $(word 1,$(subst _, ,$*))
 simd_width = $(subst w,,$(word 2,$(subst _, ,$*)))
 .PRECIOUS: $(B)/simd_%.o
-$(B)/simd_%.o: tests/simd_variant.c hairobb.h | $(B)
+$(B)/simd_%.o: tests/simd_variant.c tests/simd_variant.h hairobb.h | $(B)
 	$(CC) $(BASE) $(SIMD_FLAGS_$(simd_path)) -DHAIROBB_NODE_WIDTH=$(simd_width) -DVARIANT=trace_$(simd_path) -c $< -o $@
-$(B)/test_simd: tests/test_simd.c $(B)/simd_plain_w4.o $(B)/simd_sse_w4.o $(B)/simd_avx_w4.o tests/scenes.h | $(B)
+$(B)/test_simd: tests/test_simd.c $(B)/simd_plain_w4.o $(B)/simd_sse_w4.o $(B)/simd_avx_w4.o $(B)/simd_dispatch_w4.o tests/scenes.h | $(B)
 	$(CC) $(BASE) $(ARCH) $(filter %.c %.o,$^) -o $@ $(LIBS)
-$(B)/test_simd_w8: tests/test_simd.c $(B)/simd_plain_w8.o $(B)/simd_sse_w8.o $(B)/simd_avx_w8.o tests/scenes.h | $(B)
+$(B)/test_simd_w8: tests/test_simd.c $(B)/simd_plain_w8.o $(B)/simd_sse_w8.o $(B)/simd_avx_w8.o $(B)/simd_dispatch_w8.o tests/scenes.h | $(B)
 	$(CC) $(BASE) $(ARCH) $(filter %.c %.o,$^) -o $@ $(LIBS)
 
 $(B)/test_accuracy: tests/test_accuracy.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps
@@ -130,10 +132,16 @@ $(B)/bench: bench/bench.c hairobb.h tests/reference.h tests/scenes.h tests/embre
 compile-matrix: | $(B)
 	@printf '#define HAIROBB_IMPLEMENTATION\n#include "hairobb.h"\nint main(void){return 0;}\n' > $(B)/matrix.c
 	@set -e; for cc in gcc clang; do command -v $$cc >/dev/null || continue; \
-	  for flags in "" "-DHAIROBB_STATIC" "-DHAIROBB_NO_SIMD" "-mavx2" "-mavx2 -DHAIROBB_NODE_WIDTH=8" "-DHAIROBB_NO_SIMD -DHAIROBB_NODE_WIDTH=8" "-DHAIROBB_NO_THREADS" "-DHAIROBB_NO_STDIO"; do \
+	  for flags in "" "-DHAIROBB_STATIC" "-DHAIROBB_NO_SIMD" "-DHAIROBB_NO_DISPATCH" "-msse4.1" "-mavx" "-mavx2" "-mavx2 -DHAIROBB_NODE_WIDTH=8" "-DHAIROBB_NODE_WIDTH=8" "-DHAIROBB_NO_SIMD -DHAIROBB_NODE_WIDTH=8" "-DHAIROBB_NO_THREADS" "-DHAIROBB_NO_STDIO"; do \
 	    $$cc $(WARN) -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
 	    $$cc -x c++ -std=c++11 -Wall -Wextra -pedantic -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
 	    echo "compile-matrix: $$cc $$flags (C99 and C++11) clean"; done; done
+	@# runtime dispatch includes the header again by its own name: HAIROBB_SELF renames it
+	@mkdir -p $(B)/renamed && cp hairobb.h $(B)/renamed/third_party_hair.h
+	@printf '#define HAIROBB_IMPLEMENTATION\n#include "renamed/third_party_hair.h"\nint main(void){return 0;}\n' > $(B)/matrix_renamed.c
+	@set -e; for cc in gcc clang; do command -v $$cc >/dev/null || continue; \
+	  $$cc $(WARN) -Werror -O2 '-DHAIROBB_SELF="third_party_hair.h"' -c $(B)/matrix_renamed.c -o $(B)/matrix.o; \
+	  echo "compile-matrix: $$cc with the header renamed (HAIROBB_SELF) clean"; done
 
 test: deps $(TESTS) $(SANITIZED) compile-matrix examples $(B)/run_examples
 	@sh tests/run_all.sh $(TESTS) $(SANITIZED) $(B)/run_examples

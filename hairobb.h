@@ -208,7 +208,8 @@ typedef enum hairobb_result {
     HAIROBB_ERROR_TOO_LARGE,          /* counts whose byte sizes overflow, > 2^32-1 segments */
     HAIROBB_ERROR_CANCELLED,          /* the progress callback asked to stop */
     HAIROBB_ERROR_INVALID_FILE,       /* .hair data: bad magic, reserved flags, counts that disagree with the size */
-    HAIROBB_ERROR_IO                  /* a file could not be opened or read */
+    HAIROBB_ERROR_IO,                 /* a file could not be opened or read */
+    HAIROBB_ERROR_UNSUPPORTED         /* options.simd: a path this build or this CPU lacks */
 } hairobb_result;
 
 HAIROBB_DEF const char *hairobb_result_string(hairobb_result r);
@@ -254,6 +255,17 @@ typedef enum hairobb_basis {
     HAIROBB_BASIS_LINEAR        /* 2 points: a straight segment */
 } hairobb_basis;
 
+/* The instruction set a BVH's traversal and intersector use. Every path
+   gives the same answers, bit for bit. */
+typedef enum hairobb_simd {
+    HAIROBB_SIMD_AUTO = 0,      /* options.simd: the widest path this build and this CPU run (default) */
+    HAIROBB_SIMD_NONE,          /* plain C */
+    HAIROBB_SIMD_SSE2,
+    HAIROBB_SIMD_SSE41,
+    HAIROBB_SIMD_AVX,
+    HAIROBB_SIMD_AVX2
+} hairobb_simd;
+
 struct hairobb_ray;
 struct hairobb_hit;
 /* An any-hit filter: called for each hit a ray finds before it is taken
@@ -281,6 +293,7 @@ typedef struct hairobb_build_options {
     const float *tangents;           /* HAIROBB_BASIS_HERMITE: 4 floats per vertex, dP/du and dr/du */
     hairobb_filter_fn hit_filter;    /* NULL: every hit counts */
     void *hit_filter_user;
+    hairobb_simd simd;               /* HAIROBB_SIMD_AUTO, or a path to force */
 } hairobb_build_options;
 
 typedef struct hairobb_bvh hairobb_bvh;
@@ -303,6 +316,10 @@ typedef struct hairobb_stats {
     size_t node_bytes, leaf_bytes;
 } hairobb_stats;
 HAIROBB_DEF void hairobb_get_stats(const hairobb_bvh *bvh, hairobb_stats *stats);
+
+/* The path the BVH traces with (HAIROBB_SIMD_NONE for NULL), and its name. */
+HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh);
+HAIROBB_DEF const char *hairobb_simd_string(hairobb_simd simd);
 
 /* Bounds of all ribbons, radius included. */
 HAIROBB_DEF void hairobb_bounds(const hairobb_bvh *bvh, float lower[3], float upper[3]);
@@ -382,7 +399,9 @@ HAIROBB_DEF void hairobb_hair_free(hairobb_hair *hair);
 /*                              IMPLEMENTATION                              */
 /* ======================================================================== */
 #ifdef HAIROBB_IMPLEMENTATION
-#ifndef HAIROBB_IMPLEMENTATION_DONE
+/* HAIROBB__KERNEL_PASS: the file includes itself to compile the kernels again */
+#if !defined(HAIROBB_IMPLEMENTATION_DONE) || defined(HAIROBB__KERNEL_PASS)
+#ifndef HAIROBB__KERNEL_PASS
 #define HAIROBB_IMPLEMENTATION_DONE
 
 #include <float.h>
@@ -405,16 +424,41 @@ HAIROBB_DEF void hairobb_hair_free(hairobb_hair *hair);
 #define HAIROBB_ASSERT(x) assert(x)
 #endif
 
+/* The instruction sets the compiler targets: the kernels' baseline path. */
+#define HAIROBB__SSE 0
+#define HAIROBB__SSE41 0
+#define HAIROBB__AVX 0
+#define HAIROBB__AVX2 0
 #if !defined(HAIROBB_NO_SIMD) && (defined(__SSE2__) || defined(_M_X64))
+#undef HAIROBB__SSE
 #define HAIROBB__SSE 1
 #include <emmintrin.h>
 #if defined(__SSE4_1__)
+#undef HAIROBB__SSE41
+#define HAIROBB__SSE41 1
 #include <smmintrin.h>
 #endif
 #if defined(__AVX__)
+#undef HAIROBB__AVX
 #define HAIROBB__AVX 1
 #include <immintrin.h>
 #endif
+#if defined(__AVX2__)
+#undef HAIROBB__AVX2
+#define HAIROBB__AVX2 1
+#endif
+#endif
+#define HAIROBB__BASELINE_SIMD (HAIROBB__AVX2 ? HAIROBB_SIMD_AVX2 : HAIROBB__AVX ? HAIROBB_SIMD_AVX : \
+                                HAIROBB__SSE41 ? HAIROBB_SIMD_SSE41 : HAIROBB__SSE ? HAIROBB_SIMD_SSE2 : HAIROBB_SIMD_NONE)
+/* Runtime dispatch: where the baseline lacks AVX2, gcc and clang compile the
+   kernels a second time for AVX2 (target pragmas; their intrinsics need no
+   -m flag) and each BVH picks the path its CPU runs. */
+#if HAIROBB__SSE && !HAIROBB__AVX2 && !defined(HAIROBB_NO_DISPATCH) && (defined(__x86_64__) || defined(__i386__)) && \
+    ((defined(__clang__) && __clang_major__ >= 4) || (!defined(__clang__) && defined(__GNUC__) && __GNUC__ >= 5))
+#define HAIROBB__DISPATCH 1
+#include <immintrin.h>
+#else
+#define HAIROBB__DISPATCH 0
 #endif
 
 /* The build uses POSIX threads where there are any (HAIROBB_NO_THREADS: never). */
@@ -571,195 +615,6 @@ static float hairobb__bezier4(const float *cp, int k, float u)
     return hairobb__bezier(c, u, NULL, NULL);
 }
 
-/* ------------------------------------------------------------------------ */
-/* SIMD: 4 or 8 lanes for nodes, 8 for curve points (inline, as a build    */
-/* uses only some). Each operation has a plain C twin with the same         */
-/* rounding and NaN rule (min(a,b) is a < b ? a : b, as SSE's minps), so    */
-/* every path gives the same answers.                                       */
-/* ------------------------------------------------------------------------ */
-#if HAIROBB__SSE
-typedef __m128 hairobb__v4;
-static inline hairobb__v4 hairobb__v4_load(const float *p) { return _mm_loadu_ps(p); }
-static inline hairobb__v4 hairobb__v4_set1(float x) { return _mm_set1_ps(x); }
-static inline hairobb__v4 hairobb__v4_add(hairobb__v4 a, hairobb__v4 b) { return _mm_add_ps(a, b); }
-static inline hairobb__v4 hairobb__v4_sub(hairobb__v4 a, hairobb__v4 b) { return _mm_sub_ps(a, b); }
-static inline hairobb__v4 hairobb__v4_mul(hairobb__v4 a, hairobb__v4 b) { return _mm_mul_ps(a, b); }
-static inline hairobb__v4 hairobb__v4_div(hairobb__v4 a, hairobb__v4 b) { return _mm_div_ps(a, b); }
-static inline hairobb__v4 hairobb__v4_min(hairobb__v4 a, hairobb__v4 b) { return _mm_min_ps(a, b); }
-static inline hairobb__v4 hairobb__v4_max(hairobb__v4 a, hairobb__v4 b) { return _mm_max_ps(a, b); }
-static inline int hairobb__v4_le_bits(hairobb__v4 a, hairobb__v4 b) { return _mm_movemask_ps(_mm_cmple_ps(a, b)); }
-static inline void hairobb__v4_store(float *p, hairobb__v4 a) { _mm_storeu_ps(p, a); }
-static inline hairobb__v4 hairobb__v4_abs(hairobb__v4 a) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), a); }
-/* Rows a..d become columns (moves only). */
-static inline void hairobb__v4_transpose(hairobb__v4 *a, hairobb__v4 *b, hairobb__v4 *c, hairobb__v4 *d) { _MM_TRANSPOSE4_PS(*a, *b, *c, *d); }
-/* max(max(a0, a2), max(a1, a3)) with max's NaN rule. */
-static inline float hairobb__v4_hmax(hairobb__v4 a)
-{
-    __m128 t = _mm_max_ps(a, _mm_movehl_ps(a, a));
-    return _mm_cvtss_f32(_mm_max_ss(t, _mm_shuffle_ps(t, t, 1)));
-}
-/* x, or +-tiny where |x| < tiny: keeps 1/x finite for directions parallel to a slab. */
-static inline hairobb__v4 hairobb__v4_nonzero(hairobb__v4 x, float tiny)
-{
-    __m128 sign = _mm_and_ps(x, _mm_set1_ps(-0.0f));
-    __m128 small = _mm_cmplt_ps(_mm_andnot_ps(_mm_set1_ps(-0.0f), x), _mm_set1_ps(tiny));
-    __m128 replacement = _mm_or_ps(sign, _mm_set1_ps(tiny));
-    return _mm_or_ps(_mm_and_ps(small, replacement), _mm_andnot_ps(small, x));
-}
-#if defined(__SSE4_1__)
-static inline hairobb__v4 hairobb__v4_from_bytes(const signed char *q)
-{
-    int packed;
-    memcpy(&packed, q, sizeof packed);
-    return _mm_cvtepi32_ps(_mm_cvtepi8_epi32(_mm_cvtsi32_si128(packed)));
-}
-#else
-static inline hairobb__v4 hairobb__v4_from_bytes(const signed char *q)
-{
-    return _mm_setr_ps((float)q[0], (float)q[1], (float)q[2], (float)q[3]);
-}
-#endif
-#else
-typedef struct hairobb__v4 { float f[4]; } hairobb__v4;
-#define HAIROBB__V4_MAP(expr) hairobb__v4 r; int i; for (i = 0; i < 4; ++i) r.f[i] = (expr); return r
-static inline hairobb__v4 hairobb__v4_load(const float *p) { HAIROBB__V4_MAP(p[i]); }
-static inline hairobb__v4 hairobb__v4_set1(float x) { HAIROBB__V4_MAP(x); }
-static inline hairobb__v4 hairobb__v4_add(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] + b.f[i]); }
-static inline hairobb__v4 hairobb__v4_sub(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] - b.f[i]); }
-static inline hairobb__v4 hairobb__v4_mul(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] * b.f[i]); }
-static inline hairobb__v4 hairobb__v4_div(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] / b.f[i]); }
-static inline hairobb__v4 hairobb__v4_min(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] < b.f[i] ? a.f[i] : b.f[i]); }
-static inline hairobb__v4 hairobb__v4_max(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] > b.f[i] ? a.f[i] : b.f[i]); }
-static inline hairobb__v4 hairobb__v4_nonzero(hairobb__v4 x, float tiny)
-{
-    HAIROBB__V4_MAP(fabsf(x.f[i]) < tiny ? (signbit(x.f[i]) ? -tiny : tiny) : x.f[i]);
-}
-static inline hairobb__v4 hairobb__v4_from_bytes(const signed char *q) { HAIROBB__V4_MAP((float)q[i]); }
-#undef HAIROBB__V4_MAP
-static inline int hairobb__v4_le_bits(hairobb__v4 a, hairobb__v4 b)
-{
-    int i, bits = 0;
-    for (i = 0; i < 4; ++i) bits |= (a.f[i] <= b.f[i]) << i;
-    return bits;
-}
-static inline void hairobb__v4_store(float *p, hairobb__v4 a) { memcpy(p, a.f, sizeof a.f); }
-static inline hairobb__v4 hairobb__v4_abs(hairobb__v4 a)
-{
-    hairobb__v4 r;
-    int i;
-    for (i = 0; i < 4; ++i) r.f[i] = fabsf(a.f[i]);
-    return r;
-}
-static inline void hairobb__v4_transpose(hairobb__v4 *a, hairobb__v4 *b, hairobb__v4 *c, hairobb__v4 *d)
-{
-    hairobb__v4 *rows[4];
-    float m[4][4];
-    int i, j;
-    rows[0] = a; rows[1] = b; rows[2] = c; rows[3] = d;
-    for (i = 0; i < 4; ++i) for (j = 0; j < 4; ++j) m[i][j] = rows[j]->f[i];
-    for (i = 0; i < 4; ++i) memcpy(rows[i]->f, m[i], sizeof m[i]);
-}
-static inline float hairobb__v4_hmax(hairobb__v4 a)
-{
-    float t0 = a.f[0] > a.f[2] ? a.f[0] : a.f[2], t1 = a.f[1] > a.f[3] ? a.f[1] : a.f[3];
-    return t0 > t1 ? t0 : t1;
-}
-#endif
-
-#if HAIROBB__AVX
-typedef __m256 hairobb__v8;
-static inline hairobb__v8 hairobb__v8_load(const float *p) { return _mm256_loadu_ps(p); }
-static inline hairobb__v8 hairobb__v8_set1(float x) { return _mm256_set1_ps(x); }
-static inline hairobb__v8 hairobb__v8_add(hairobb__v8 a, hairobb__v8 b) { return _mm256_add_ps(a, b); }
-static inline hairobb__v8 hairobb__v8_sub(hairobb__v8 a, hairobb__v8 b) { return _mm256_sub_ps(a, b); }
-static inline hairobb__v8 hairobb__v8_mul(hairobb__v8 a, hairobb__v8 b) { return _mm256_mul_ps(a, b); }
-static inline hairobb__v8 hairobb__v8_div(hairobb__v8 a, hairobb__v8 b) { return _mm256_div_ps(a, b); }
-static inline hairobb__v8 hairobb__v8_min(hairobb__v8 a, hairobb__v8 b) { return _mm256_min_ps(a, b); }
-static inline hairobb__v8 hairobb__v8_max(hairobb__v8 a, hairobb__v8 b) { return _mm256_max_ps(a, b); }
-static inline int hairobb__v8_le_bits(hairobb__v8 a, hairobb__v8 b) { return _mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LE_OQ)); }
-static inline void hairobb__v8_store(float *p, hairobb__v8 a) { _mm256_storeu_ps(p, a); }
-#if defined(__AVX2__)
-static inline hairobb__v8 hairobb__v8_from_bytes(const signed char *q)
-{
-    return _mm256_cvtepi32_ps(_mm256_cvtepi8_epi32(_mm_loadl_epi64((const __m128i *)(const void *)q)));
-}
-#else
-static inline hairobb__v8 hairobb__v8_from_bytes(const signed char *q)
-{
-    return _mm256_set_m128(hairobb__v4_from_bytes(q + 4), hairobb__v4_from_bytes(q));
-}
-#endif
-static inline hairobb__v8 hairobb__v8_nonzero(hairobb__v8 x, float tiny)
-{
-    __m256 sign = _mm256_and_ps(x, _mm256_set1_ps(-0.0f));
-    __m256 small = _mm256_cmp_ps(_mm256_andnot_ps(_mm256_set1_ps(-0.0f), x), _mm256_set1_ps(tiny), _CMP_LT_OQ);
-    __m256 replacement = _mm256_or_ps(sign, _mm256_set1_ps(tiny));
-    return _mm256_or_ps(_mm256_and_ps(small, replacement), _mm256_andnot_ps(small, x));
-}
-#else
-/* Two 4-lane halves: SSE, or plain C through the 4-lane twin above. */
-typedef struct hairobb__v8 { hairobb__v4 lo, hi; } hairobb__v8;
-#define HAIROBB__V8_PAIR(op) hairobb__v8 r; r.lo = op(a.lo, b.lo); r.hi = op(a.hi, b.hi); return r
-static inline hairobb__v8 hairobb__v8_load(const float *p) { hairobb__v8 r; r.lo = hairobb__v4_load(p); r.hi = hairobb__v4_load(p + 4); return r; }
-static inline hairobb__v8 hairobb__v8_set1(float x) { hairobb__v8 r; r.lo = r.hi = hairobb__v4_set1(x); return r; }
-static inline hairobb__v8 hairobb__v8_add(hairobb__v8 a, hairobb__v8 b) { HAIROBB__V8_PAIR(hairobb__v4_add); }
-static inline hairobb__v8 hairobb__v8_sub(hairobb__v8 a, hairobb__v8 b) { HAIROBB__V8_PAIR(hairobb__v4_sub); }
-static inline hairobb__v8 hairobb__v8_mul(hairobb__v8 a, hairobb__v8 b) { HAIROBB__V8_PAIR(hairobb__v4_mul); }
-static inline hairobb__v8 hairobb__v8_div(hairobb__v8 a, hairobb__v8 b) { HAIROBB__V8_PAIR(hairobb__v4_div); }
-static inline hairobb__v8 hairobb__v8_min(hairobb__v8 a, hairobb__v8 b) { HAIROBB__V8_PAIR(hairobb__v4_min); }
-static inline hairobb__v8 hairobb__v8_max(hairobb__v8 a, hairobb__v8 b) { HAIROBB__V8_PAIR(hairobb__v4_max); }
-#undef HAIROBB__V8_PAIR
-static inline int hairobb__v8_le_bits(hairobb__v8 a, hairobb__v8 b) { return hairobb__v4_le_bits(a.lo, b.lo) | (hairobb__v4_le_bits(a.hi, b.hi) << 4); }
-static inline void hairobb__v8_store(float *p, hairobb__v8 a) { hairobb__v4_store(p, a.lo); hairobb__v4_store(p + 4, a.hi); }
-static inline hairobb__v8 hairobb__v8_from_bytes(const signed char *q)
-{
-    hairobb__v8 r;
-    r.lo = hairobb__v4_from_bytes(q);
-    r.hi = hairobb__v4_from_bytes(q + 4);
-    return r;
-}
-static inline hairobb__v8 hairobb__v8_nonzero(hairobb__v8 x, float tiny)
-{
-    hairobb__v8 r;
-    r.lo = hairobb__v4_nonzero(x.lo, tiny);
-    r.hi = hairobb__v4_nonzero(x.hi, tiny);
-    return r;
-}
-#endif
-
-/* Node-wide vectors: one lane per child. */
-#if HAIROBB__W == 8
-typedef hairobb__v8 hairobb__vn;
-#define hairobb__vn_load hairobb__v8_load
-#define hairobb__vn_set1 hairobb__v8_set1
-#define hairobb__vn_add hairobb__v8_add
-#define hairobb__vn_sub hairobb__v8_sub
-#define hairobb__vn_mul hairobb__v8_mul
-#define hairobb__vn_div hairobb__v8_div
-#define hairobb__vn_min hairobb__v8_min
-#define hairobb__vn_max hairobb__v8_max
-#define hairobb__vn_le_bits hairobb__v8_le_bits
-#define hairobb__vn_store hairobb__v8_store
-#define hairobb__vn_nonzero hairobb__v8_nonzero
-#define hairobb__vn_from_bytes hairobb__v8_from_bytes
-#elif HAIROBB__W == 4
-typedef hairobb__v4 hairobb__vn;
-#define hairobb__vn_load hairobb__v4_load
-#define hairobb__vn_set1 hairobb__v4_set1
-#define hairobb__vn_add hairobb__v4_add
-#define hairobb__vn_sub hairobb__v4_sub
-#define hairobb__vn_mul hairobb__v4_mul
-#define hairobb__vn_div hairobb__v4_div
-#define hairobb__vn_min hairobb__v4_min
-#define hairobb__vn_max hairobb__v4_max
-#define hairobb__vn_le_bits hairobb__v4_le_bits
-#define hairobb__vn_store hairobb__v4_store
-#define hairobb__vn_nonzero hairobb__v4_nonzero
-#define hairobb__vn_from_bytes hairobb__v4_from_bytes
-#else
-#error "HAIROBB_NODE_WIDTH must be 4 or 8"
-#endif
-
 static int hairobb__lowest_bit(unsigned bits)
 {
 #if defined(__GNUC__) || defined(__clang__)
@@ -842,6 +697,7 @@ struct hairobb_bvh {
     uint64_t root;
     float lower[3], upper[3];
     hairobb_precision precision;
+    hairobb_simd simd;                /* the kernels' path */
     int pieces, piece_chunks;         /* linear pieces; 8-lane chunks of them */
     unsigned chunk_valid[2];          /* lanes holding real pieces */
     /* Bernstein weights of the pieces' start and end points: [chunk][start/end][basis][lane] */
@@ -864,8 +720,40 @@ HAIROBB_DEF const char *hairobb_result_string(hairobb_result r)
     case HAIROBB_ERROR_CANCELLED: return "build cancelled by the progress callback";
     case HAIROBB_ERROR_INVALID_FILE: return "invalid .hair data (magic, reserved flags, or counts that disagree with the size)";
     case HAIROBB_ERROR_IO: return "file could not be opened or read";
+    case HAIROBB_ERROR_UNSUPPORTED: return "SIMD path (options.simd) not compiled in or not supported by this CPU";
     }
     return "unknown hairobb_result";
+}
+
+HAIROBB_DEF const char *hairobb_simd_string(hairobb_simd simd)
+{
+    switch (simd) {
+    case HAIROBB_SIMD_AUTO: return "auto";
+    case HAIROBB_SIMD_NONE: return "plain C";
+    case HAIROBB_SIMD_SSE2: return "SSE2";
+    case HAIROBB_SIMD_SSE41: return "SSE4.1";
+    case HAIROBB_SIMD_AVX: return "AVX";
+    case HAIROBB_SIMD_AVX2: return "AVX2";
+    }
+    return "unknown hairobb_simd";
+}
+
+/* The path options.simd asks for: the baseline (what the compiler targets),
+   or AVX2 where the kernels were compiled for it too and the CPU (and its
+   operating system) runs it. */
+static hairobb_result hairobb__choose_simd(hairobb_simd requested, hairobb_simd *chosen)
+{
+    int avx2 = 0;
+#if HAIROBB__DISPATCH
+    __builtin_cpu_init();
+    avx2 = __builtin_cpu_supports("avx2") != 0;
+#endif
+    *chosen = HAIROBB__BASELINE_SIMD;
+    if (requested == HAIROBB_SIMD_AUTO || (requested == HAIROBB_SIMD_AVX2 && avx2)) {
+        if (avx2) *chosen = HAIROBB_SIMD_AVX2;
+        return HAIROBB_OK;
+    }
+    return requested == HAIROBB__BASELINE_SIMD ? HAIROBB_OK : HAIROBB_ERROR_UNSUPPORTED;
 }
 
 /* Control points a segment of the basis reads from indices[i] on. */
@@ -2397,6 +2285,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     hairobb__tries tries;
     hairobb_bvh *bvh;
     hairobb_result result;
+    hairobb_simd simd;
     size_t i, extra;
 
     if (out) *out = NULL;
@@ -2411,6 +2300,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
         !(opt.spatial_split_budget >= 0.0f && opt.spatial_split_budget <= 4.0f) ||
         opt.max_leaf_size > HAIROBB__MAX_LEAF || opt.hair_space_candidates > HAIROBB__MAX_CANDIDATES ||
         opt.curve_pieces > HAIROBB__MAX_PIECES || opt.threads > 256 || (unsigned)opt.basis > HAIROBB_BASIS_LINEAR ||
+        (unsigned)opt.simd > HAIROBB_SIMD_AVX2 ||
         (opt.basis == HAIROBB_BASIS_HERMITE) != (opt.tangents != NULL))
         return HAIROBB_ERROR_INVALID_ARGUMENT;
     /* the defaults the bench chose (see README, "Ablation") */
@@ -2418,6 +2308,8 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     if (opt.spatial_splits == HAIROBB_AUTO) opt.spatial_splits = HAIROBB_OFF;
     if (opt.clustering == HAIROBB_AUTO) opt.clustering = HAIROBB_OFF;
     if (opt.spatial_split_budget == 0.0f) opt.spatial_split_budget = 0.25f;
+    result = hairobb__choose_simd(opt.simd, &simd);
+    if (result != HAIROBB_OK) return result;
     result = hairobb__validate(vertices, vertex_count, indices, segment_count, hairobb__basis_points(opt.basis), opt.tangents);
     if (result != HAIROBB_OK) return result;
 
@@ -2506,6 +2398,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     bvh->hit_filter_user = opt.hit_filter_user;
     bvh->allocator_user = b.user;
     bvh->precision = opt.precision;
+    bvh->simd = simd;
     hairobb__setup_pieces(bvh, (int)opt.curve_pieces);
     bvh->stats = b.stats;
     bvh->stats.node_bytes = b.node_bytes;
@@ -2560,7 +2453,7 @@ HAIROBB_DEF void hairobb_bounds(const hairobb_bvh *bvh, float lower[3], float up
 }
 
 /* ------------------------------------------------------------------------ */
-/* Traversal                                                                 */
+/* Rays: what every traversal path reads                                   */
 /* ------------------------------------------------------------------------ */
 #if defined(__GNUC__) || defined(__clang__)
 #define HAIROBB__INLINE static inline __attribute__((always_inline))
@@ -2641,6 +2534,244 @@ static int hairobb__ray_setup(hairobb__ray_state *rs, const hairobb_bvh *bvh, co
     return 1;
 }
 
+/* A segment's control points in ray space: x, y across the ray, z along it. */
+typedef struct hairobb__ray_curve {
+    float x[4], y[4], z[4], r[4];
+} hairobb__ray_curve;
+
+/* The same curve in power form, a[0] + a[1] u + a[2] u^2 + a[3] u^3: the
+   root finder evaluates it many times, Horner's rule makes that cheap. */
+typedef struct hairobb__ray_poly {
+    float x[4], y[4], z[4], r[4];
+} hairobb__ray_poly;
+
+/* Instrumented builds (tests/test_conservative.c) see each segment of each
+   leaf a ray reaches; nonzero skips its intersection, so no hit shortens
+   the ray and the traversal reaches every leaf the ray's boxes lead to. */
+#ifndef HAIROBB__LEAF_VISIT
+#define HAIROBB__LEAF_VISIT(rs, prim) 0
+#endif
+
+/* A ray leaving the hit `from` (NULL: none): the band it skips is twice the
+   segment's largest radius, the ribbon's reach whichever way it faces the
+   new ray, plus 8 float ulps of the origin for the rounding of the hit
+   point the caller computed. */
+static int hairobb__ray_setup_from(hairobb__ray_state *rs, const hairobb_bvh *bvh, const hairobb_hit *from,
+                                   const hairobb_ray *ray)
+{
+    const float *cp;
+    float max_r, magnitude;
+    if (!hairobb__ray_setup(rs, bvh, ray)) return 0;
+    if (!from || from->prim_id >= bvh->segment_count) return 1;
+    cp = bvh->vertices + 4 * (size_t)bvh->indices[from->prim_id];
+    max_r = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
+    magnitude = hairobb__maxf(hairobb__maxf(fabsf(ray->org[0]), fabsf(ray->org[1])), fabsf(ray->org[2]));
+    rs->skip_t = (2.0f * max_r + magnitude * (8.0f * FLT_EPSILON)) * rs->inv_dir_length;
+    rs->skip_prim = from->prim_id;
+    memcpy(rs->skip_first, cp, sizeof rs->skip_first);
+    memcpy(rs->skip_last, cp + 12, sizeof rs->skip_last);
+    return 1;
+}
+
+#endif /* !HAIROBB__KERNEL_PASS */
+
+/* ======================================================================== */
+/* The kernels: SIMD, traversal and ray/curve intersection. Compiled for    */
+/* the instruction sets the compiler targets, and again for AVX2 with every */
+/* name suffixed _avx2 where HAIROBB__DISPATCH (see "Runtime dispatch").    */
+/* ======================================================================== */
+/* ------------------------------------------------------------------------ */
+/* SIMD: 4 or 8 lanes for nodes, 8 for curve points (inline, as a build    */
+/* uses only some). Each operation has a plain C twin with the same         */
+/* rounding and NaN rule (min(a,b) is a < b ? a : b, as SSE's minps), so    */
+/* every path gives the same answers.                                       */
+/* ------------------------------------------------------------------------ */
+#if HAIROBB__SSE
+typedef __m128 hairobb__v4;
+static inline hairobb__v4 hairobb__v4_load(const float *p) { return _mm_loadu_ps(p); }
+static inline hairobb__v4 hairobb__v4_set1(float x) { return _mm_set1_ps(x); }
+static inline hairobb__v4 hairobb__v4_add(hairobb__v4 a, hairobb__v4 b) { return _mm_add_ps(a, b); }
+static inline hairobb__v4 hairobb__v4_sub(hairobb__v4 a, hairobb__v4 b) { return _mm_sub_ps(a, b); }
+static inline hairobb__v4 hairobb__v4_mul(hairobb__v4 a, hairobb__v4 b) { return _mm_mul_ps(a, b); }
+static inline hairobb__v4 hairobb__v4_div(hairobb__v4 a, hairobb__v4 b) { return _mm_div_ps(a, b); }
+static inline hairobb__v4 hairobb__v4_min(hairobb__v4 a, hairobb__v4 b) { return _mm_min_ps(a, b); }
+static inline hairobb__v4 hairobb__v4_max(hairobb__v4 a, hairobb__v4 b) { return _mm_max_ps(a, b); }
+static inline int hairobb__v4_le_bits(hairobb__v4 a, hairobb__v4 b) { return _mm_movemask_ps(_mm_cmple_ps(a, b)); }
+static inline void hairobb__v4_store(float *p, hairobb__v4 a) { _mm_storeu_ps(p, a); }
+static inline hairobb__v4 hairobb__v4_abs(hairobb__v4 a) { return _mm_andnot_ps(_mm_set1_ps(-0.0f), a); }
+/* Rows a..d become columns (moves only). */
+static inline void hairobb__v4_transpose(hairobb__v4 *a, hairobb__v4 *b, hairobb__v4 *c, hairobb__v4 *d) { _MM_TRANSPOSE4_PS(*a, *b, *c, *d); }
+/* max(max(a0, a2), max(a1, a3)) with max's NaN rule. */
+static inline float hairobb__v4_hmax(hairobb__v4 a)
+{
+    __m128 t = _mm_max_ps(a, _mm_movehl_ps(a, a));
+    return _mm_cvtss_f32(_mm_max_ss(t, _mm_shuffle_ps(t, t, 1)));
+}
+/* x, or +-tiny where |x| < tiny: keeps 1/x finite for directions parallel to a slab. */
+static inline hairobb__v4 hairobb__v4_nonzero(hairobb__v4 x, float tiny)
+{
+    __m128 sign = _mm_and_ps(x, _mm_set1_ps(-0.0f));
+    __m128 small = _mm_cmplt_ps(_mm_andnot_ps(_mm_set1_ps(-0.0f), x), _mm_set1_ps(tiny));
+    __m128 replacement = _mm_or_ps(sign, _mm_set1_ps(tiny));
+    return _mm_or_ps(_mm_and_ps(small, replacement), _mm_andnot_ps(small, x));
+}
+#if HAIROBB__SSE41
+static inline hairobb__v4 hairobb__v4_from_bytes(const signed char *q)
+{
+    int packed;
+    memcpy(&packed, q, sizeof packed);
+    return _mm_cvtepi32_ps(_mm_cvtepi8_epi32(_mm_cvtsi32_si128(packed)));
+}
+#else
+static inline hairobb__v4 hairobb__v4_from_bytes(const signed char *q)
+{
+    return _mm_setr_ps((float)q[0], (float)q[1], (float)q[2], (float)q[3]);
+}
+#endif
+#else
+typedef struct hairobb__v4 { float f[4]; } hairobb__v4;
+#define HAIROBB__V4_MAP(expr) hairobb__v4 r; int i; for (i = 0; i < 4; ++i) r.f[i] = (expr); return r
+static inline hairobb__v4 hairobb__v4_load(const float *p) { HAIROBB__V4_MAP(p[i]); }
+static inline hairobb__v4 hairobb__v4_set1(float x) { HAIROBB__V4_MAP(x); }
+static inline hairobb__v4 hairobb__v4_add(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] + b.f[i]); }
+static inline hairobb__v4 hairobb__v4_sub(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] - b.f[i]); }
+static inline hairobb__v4 hairobb__v4_mul(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] * b.f[i]); }
+static inline hairobb__v4 hairobb__v4_div(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] / b.f[i]); }
+static inline hairobb__v4 hairobb__v4_min(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] < b.f[i] ? a.f[i] : b.f[i]); }
+static inline hairobb__v4 hairobb__v4_max(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] > b.f[i] ? a.f[i] : b.f[i]); }
+static inline hairobb__v4 hairobb__v4_nonzero(hairobb__v4 x, float tiny)
+{
+    HAIROBB__V4_MAP(fabsf(x.f[i]) < tiny ? (signbit(x.f[i]) ? -tiny : tiny) : x.f[i]);
+}
+static inline hairobb__v4 hairobb__v4_from_bytes(const signed char *q) { HAIROBB__V4_MAP((float)q[i]); }
+#undef HAIROBB__V4_MAP
+static inline int hairobb__v4_le_bits(hairobb__v4 a, hairobb__v4 b)
+{
+    int i, bits = 0;
+    for (i = 0; i < 4; ++i) bits |= (a.f[i] <= b.f[i]) << i;
+    return bits;
+}
+static inline void hairobb__v4_store(float *p, hairobb__v4 a) { memcpy(p, a.f, sizeof a.f); }
+static inline hairobb__v4 hairobb__v4_abs(hairobb__v4 a)
+{
+    hairobb__v4 r;
+    int i;
+    for (i = 0; i < 4; ++i) r.f[i] = fabsf(a.f[i]);
+    return r;
+}
+static inline void hairobb__v4_transpose(hairobb__v4 *a, hairobb__v4 *b, hairobb__v4 *c, hairobb__v4 *d)
+{
+    hairobb__v4 *rows[4];
+    float m[4][4];
+    int i, j;
+    rows[0] = a; rows[1] = b; rows[2] = c; rows[3] = d;
+    for (i = 0; i < 4; ++i) for (j = 0; j < 4; ++j) m[i][j] = rows[j]->f[i];
+    for (i = 0; i < 4; ++i) memcpy(rows[i]->f, m[i], sizeof m[i]);
+}
+static inline float hairobb__v4_hmax(hairobb__v4 a)
+{
+    float t0 = a.f[0] > a.f[2] ? a.f[0] : a.f[2], t1 = a.f[1] > a.f[3] ? a.f[1] : a.f[3];
+    return t0 > t1 ? t0 : t1;
+}
+#endif
+
+#if HAIROBB__AVX
+typedef __m256 hairobb__v8;
+static inline hairobb__v8 hairobb__v8_load(const float *p) { return _mm256_loadu_ps(p); }
+static inline hairobb__v8 hairobb__v8_set1(float x) { return _mm256_set1_ps(x); }
+static inline hairobb__v8 hairobb__v8_add(hairobb__v8 a, hairobb__v8 b) { return _mm256_add_ps(a, b); }
+static inline hairobb__v8 hairobb__v8_sub(hairobb__v8 a, hairobb__v8 b) { return _mm256_sub_ps(a, b); }
+static inline hairobb__v8 hairobb__v8_mul(hairobb__v8 a, hairobb__v8 b) { return _mm256_mul_ps(a, b); }
+static inline hairobb__v8 hairobb__v8_div(hairobb__v8 a, hairobb__v8 b) { return _mm256_div_ps(a, b); }
+static inline hairobb__v8 hairobb__v8_min(hairobb__v8 a, hairobb__v8 b) { return _mm256_min_ps(a, b); }
+static inline hairobb__v8 hairobb__v8_max(hairobb__v8 a, hairobb__v8 b) { return _mm256_max_ps(a, b); }
+static inline int hairobb__v8_le_bits(hairobb__v8 a, hairobb__v8 b) { return _mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LE_OQ)); }
+static inline void hairobb__v8_store(float *p, hairobb__v8 a) { _mm256_storeu_ps(p, a); }
+#if HAIROBB__AVX2
+static inline hairobb__v8 hairobb__v8_from_bytes(const signed char *q)
+{
+    return _mm256_cvtepi32_ps(_mm256_cvtepi8_epi32(_mm_loadl_epi64((const __m128i *)(const void *)q)));
+}
+#else
+static inline hairobb__v8 hairobb__v8_from_bytes(const signed char *q)
+{
+    return _mm256_set_m128(hairobb__v4_from_bytes(q + 4), hairobb__v4_from_bytes(q));
+}
+#endif
+static inline hairobb__v8 hairobb__v8_nonzero(hairobb__v8 x, float tiny)
+{
+    __m256 sign = _mm256_and_ps(x, _mm256_set1_ps(-0.0f));
+    __m256 small = _mm256_cmp_ps(_mm256_andnot_ps(_mm256_set1_ps(-0.0f), x), _mm256_set1_ps(tiny), _CMP_LT_OQ);
+    __m256 replacement = _mm256_or_ps(sign, _mm256_set1_ps(tiny));
+    return _mm256_or_ps(_mm256_and_ps(small, replacement), _mm256_andnot_ps(small, x));
+}
+#else
+/* Two 4-lane halves: SSE, or plain C through the 4-lane twin above. */
+typedef struct hairobb__v8 { hairobb__v4 lo, hi; } hairobb__v8;
+#define HAIROBB__V8_PAIR(op) hairobb__v8 r; r.lo = op(a.lo, b.lo); r.hi = op(a.hi, b.hi); return r
+static inline hairobb__v8 hairobb__v8_load(const float *p) { hairobb__v8 r; r.lo = hairobb__v4_load(p); r.hi = hairobb__v4_load(p + 4); return r; }
+static inline hairobb__v8 hairobb__v8_set1(float x) { hairobb__v8 r; r.lo = r.hi = hairobb__v4_set1(x); return r; }
+static inline hairobb__v8 hairobb__v8_add(hairobb__v8 a, hairobb__v8 b) { HAIROBB__V8_PAIR(hairobb__v4_add); }
+static inline hairobb__v8 hairobb__v8_sub(hairobb__v8 a, hairobb__v8 b) { HAIROBB__V8_PAIR(hairobb__v4_sub); }
+static inline hairobb__v8 hairobb__v8_mul(hairobb__v8 a, hairobb__v8 b) { HAIROBB__V8_PAIR(hairobb__v4_mul); }
+static inline hairobb__v8 hairobb__v8_div(hairobb__v8 a, hairobb__v8 b) { HAIROBB__V8_PAIR(hairobb__v4_div); }
+static inline hairobb__v8 hairobb__v8_min(hairobb__v8 a, hairobb__v8 b) { HAIROBB__V8_PAIR(hairobb__v4_min); }
+static inline hairobb__v8 hairobb__v8_max(hairobb__v8 a, hairobb__v8 b) { HAIROBB__V8_PAIR(hairobb__v4_max); }
+#undef HAIROBB__V8_PAIR
+static inline int hairobb__v8_le_bits(hairobb__v8 a, hairobb__v8 b) { return hairobb__v4_le_bits(a.lo, b.lo) | (hairobb__v4_le_bits(a.hi, b.hi) << 4); }
+static inline void hairobb__v8_store(float *p, hairobb__v8 a) { hairobb__v4_store(p, a.lo); hairobb__v4_store(p + 4, a.hi); }
+static inline hairobb__v8 hairobb__v8_from_bytes(const signed char *q)
+{
+    hairobb__v8 r;
+    r.lo = hairobb__v4_from_bytes(q);
+    r.hi = hairobb__v4_from_bytes(q + 4);
+    return r;
+}
+static inline hairobb__v8 hairobb__v8_nonzero(hairobb__v8 x, float tiny)
+{
+    hairobb__v8 r;
+    r.lo = hairobb__v4_nonzero(x.lo, tiny);
+    r.hi = hairobb__v4_nonzero(x.hi, tiny);
+    return r;
+}
+#endif
+
+/* Node-wide vectors: one lane per child. */
+#if HAIROBB__W == 8
+typedef hairobb__v8 hairobb__vn;
+#define hairobb__vn_load hairobb__v8_load
+#define hairobb__vn_set1 hairobb__v8_set1
+#define hairobb__vn_add hairobb__v8_add
+#define hairobb__vn_sub hairobb__v8_sub
+#define hairobb__vn_mul hairobb__v8_mul
+#define hairobb__vn_div hairobb__v8_div
+#define hairobb__vn_min hairobb__v8_min
+#define hairobb__vn_max hairobb__v8_max
+#define hairobb__vn_le_bits hairobb__v8_le_bits
+#define hairobb__vn_store hairobb__v8_store
+#define hairobb__vn_nonzero hairobb__v8_nonzero
+#define hairobb__vn_from_bytes hairobb__v8_from_bytes
+#elif HAIROBB__W == 4
+typedef hairobb__v4 hairobb__vn;
+#define hairobb__vn_load hairobb__v4_load
+#define hairobb__vn_set1 hairobb__v4_set1
+#define hairobb__vn_add hairobb__v4_add
+#define hairobb__vn_sub hairobb__v4_sub
+#define hairobb__vn_mul hairobb__v4_mul
+#define hairobb__vn_div hairobb__v4_div
+#define hairobb__vn_min hairobb__v4_min
+#define hairobb__vn_max hairobb__v4_max
+#define hairobb__vn_le_bits hairobb__v4_le_bits
+#define hairobb__vn_store hairobb__v4_store
+#define hairobb__vn_nonzero hairobb__v4_nonzero
+#define hairobb__vn_from_bytes hairobb__v4_from_bytes
+#else
+#error "HAIROBB_NODE_WIDTH must be 4 or 8"
+#endif
+
+/* ------------------------------------------------------------------------ */
+/* Traversal                                                                 */
+/* ------------------------------------------------------------------------ */
 HAIROBB__INLINE hairobb__vn hairobb__far_scale(hairobb__vn tfar)
 {
     return hairobb__vn_mul(tfar, hairobb__vn_set1(HAIROBB__FAR_SCALE));
@@ -2860,11 +2991,6 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
 /* ------------------------------------------------------------------------ */
 /* Ray / curve intersection                                                  */
 /* ------------------------------------------------------------------------ */
-/* A segment's control points in ray space: x, y across the ray, z along it. */
-typedef struct hairobb__ray_curve {
-    float x[4], y[4], z[4], r[4];
-} hairobb__ray_curve;
-
 /* Also returns x, y, z, r as vectors, lane i = control point i. */
 HAIROBB__INLINE void hairobb__to_ray_space_v4(const hairobb__ray_state *rs, const float *cp, hairobb__ray_curve *c,
                                               hairobb__v4 *x, hairobb__v4 *y, hairobb__v4 *z, hairobb__v4 *r)
@@ -2888,12 +3014,6 @@ HAIROBB__INLINE void hairobb__to_ray_space_v4(const hairobb__ray_state *rs, cons
     hairobb__v4_store(c->z, *z);
     hairobb__v4_store(c->r, *r);
 }
-
-/* The same curve in power form, a[0] + a[1] u + a[2] u^2 + a[3] u^3: the
-   root finder evaluates it many times, Horner's rule makes that cheap. */
-typedef struct hairobb__ray_poly {
-    float x[4], y[4], z[4], r[4];
-} hairobb__ray_poly;
 
 static void hairobb__power_form(const float c[4], float a[4])
 {
@@ -3236,13 +3356,6 @@ static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state
     return hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit);
 }
 
-/* Instrumented builds (tests/test_conservative.c) see each segment of each
-   leaf a ray reaches; nonzero skips its intersection, so no hit shortens
-   the ray and the traversal reaches every leaf the ray's boxes lead to. */
-#ifndef HAIROBB__LEAF_VISIT
-#define HAIROBB__LEAF_VISIT(rs, prim) 0
-#endif
-
 /* The segment a secondary ray leaves, or one joined to its ends. */
 static int hairobb__skipped(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint32_t prim)
 {
@@ -3339,25 +3452,21 @@ static int hairobb__hit_filtered_out(const hairobb__ray_state *rs, uint32_t prim
     return !rs->hit_filter(rs->bvh->hit_filter_user, rs->ray, &hit);
 }
 
-/* A ray leaving the hit `from` (NULL: none): the band it skips is twice the
-   segment's largest radius, the ribbon's reach whichever way it faces the
-   new ray, plus 8 float ulps of the origin for the rounding of the hit
-   point the caller computed. */
-static int hairobb__ray_setup_from(hairobb__ray_state *rs, const hairobb_bvh *bvh, const hairobb_hit *from,
-                                   const hairobb_ray *ray)
+#ifndef HAIROBB__KERNEL_PASS
+/* ------------------------------------------------------------------------ */
+/* Tracing API                                                               */
+/* ------------------------------------------------------------------------ */
+#if HAIROBB__DISPATCH
+static int hairobb__traverse_avx2(const hairobb_bvh *bvh, hairobb__ray_state *rs, int any_hit) __attribute__((target("avx2")));
+#endif
+
+/* The traversal of the BVH's path (every path gives the same answers). */
+static int hairobb__trace(const hairobb_bvh *bvh, hairobb__ray_state *rs, int any_hit)
 {
-    const float *cp;
-    float max_r, magnitude;
-    if (!hairobb__ray_setup(rs, bvh, ray)) return 0;
-    if (!from || from->prim_id >= bvh->segment_count) return 1;
-    cp = bvh->vertices + 4 * (size_t)bvh->indices[from->prim_id];
-    max_r = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
-    magnitude = hairobb__maxf(hairobb__maxf(fabsf(ray->org[0]), fabsf(ray->org[1])), fabsf(ray->org[2]));
-    rs->skip_t = (2.0f * max_r + magnitude * (8.0f * FLT_EPSILON)) * rs->inv_dir_length;
-    rs->skip_prim = from->prim_id;
-    memcpy(rs->skip_first, cp, sizeof rs->skip_first);
-    memcpy(rs->skip_last, cp + 12, sizeof rs->skip_last);
-    return 1;
+#if HAIROBB__DISPATCH
+    if (bvh->simd == HAIROBB_SIMD_AVX2) return hairobb__traverse_avx2(bvh, rs, any_hit);
+#endif
+    return hairobb__traverse(bvh, rs, any_hit);
 }
 
 HAIROBB_DEF int hairobb_intersect1_from(const hairobb_bvh *bvh, const hairobb_hit *from, const hairobb_ray *ray,
@@ -3367,7 +3476,7 @@ HAIROBB_DEF int hairobb_intersect1_from(const hairobb_bvh *bvh, const hairobb_hi
     if (!hit) return 0;
     hit->prim_id = HAIROBB_INVALID_ID;
     if (!bvh || !ray || !hairobb__ray_setup_from(&rs, bvh, from, ray)) return 0;
-    if (!hairobb__traverse(bvh, &rs, 0)) return 0;
+    if (!hairobb__trace(bvh, &rs, 0)) return 0;
     hairobb__hit_at(bvh, &rs, rs.hit_prim, rs.hit_u, rs.tfar, hit);
     return 1;
 }
@@ -3376,7 +3485,7 @@ HAIROBB_DEF int hairobb_occluded1_from(const hairobb_bvh *bvh, const hairobb_hit
 {
     hairobb__ray_state rs;
     if (!bvh || !ray || !hairobb__ray_setup_from(&rs, bvh, from, ray)) return 0;
-    return hairobb__traverse(bvh, &rs, 1);
+    return hairobb__trace(bvh, &rs, 1);
 }
 
 HAIROBB_DEF int hairobb_intersect1(const hairobb_bvh *bvh, const hairobb_ray *ray, hairobb_hit *hit)
@@ -3389,7 +3498,111 @@ HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray
     return hairobb_occluded1_from(bvh, NULL, ray);
 }
 
-#endif /* HAIROBB_IMPLEMENTATION_DONE */
+HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
+{
+    return bvh ? bvh->simd : HAIROBB_SIMD_NONE;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Runtime dispatch: the kernels once more, for AVX2                         */
+/* ------------------------------------------------------------------------ */
+/* The file includes itself (HAIROBB_SELF, found first in its own directory)
+   with every name the kernels define suffixed _avx2: a name missing here is
+   a redefinition error. Nothing follows, so the names need no #undef. No
+   FMA: the paths round alike. */
+#if HAIROBB__DISPATCH
+#define hairobb__v4 hairobb__v4_avx2
+#define hairobb__v8 hairobb__v8_avx2
+#define hairobb__vn hairobb__vn_avx2
+#define hairobb__accept hairobb__accept_avx2
+#define hairobb__bezier_v4 hairobb__bezier_v4_avx2
+#define hairobb__chord_pad hairobb__chord_pad_avx2
+#define hairobb__crosses hairobb__crosses_avx2
+#define hairobb__far_scale hairobb__far_scale_avx2
+#define hairobb__hit_at hairobb__hit_at_avx2
+#define hairobb__hit_filtered_out hairobb__hit_filtered_out_avx2
+#define hairobb__horner hairobb__horner_avx2
+#define hairobb__intersect_boxes hairobb__intersect_boxes_avx2
+#define hairobb__intersect_compressed_node hairobb__intersect_compressed_node_avx2
+#define hairobb__intersect_compressed_obb_node hairobb__intersect_compressed_obb_node_avx2
+#define hairobb__intersect_curve hairobb__intersect_curve_avx2
+#define hairobb__intersect_leaf hairobb__intersect_leaf_avx2
+#define hairobb__intersect_obb_node hairobb__intersect_obb_node_avx2
+#define hairobb__intersect_rotated_node hairobb__intersect_rotated_node_avx2
+#define hairobb__intersect_segment hairobb__intersect_segment_avx2
+#define hairobb__joint_at hairobb__joint_at_avx2
+#define hairobb__piece_hit hairobb__piece_hit_avx2
+#define hairobb__power_form hairobb__power_form_avx2
+#define hairobb__refine_dip hairobb__refine_dip_avx2
+#define hairobb__refine_piece hairobb__refine_piece_avx2
+#define hairobb__ribbon_f hairobb__ribbon_f_avx2
+#define hairobb__ribbon_f_v8 hairobb__ribbon_f_v8_avx2
+#define hairobb__skipped hairobb__skipped_avx2
+#define hairobb__solve_bracketed hairobb__solve_bracketed_avx2
+#define hairobb__to_power_form hairobb__to_power_form_avx2
+#define hairobb__to_ray_space_v4 hairobb__to_ray_space_v4_avx2
+#define hairobb__traverse hairobb__traverse_avx2
+#define hairobb__try_end hairobb__try_end_avx2
+#define hairobb__try_hit hairobb__try_hit_avx2
+#define hairobb__v4_abs hairobb__v4_abs_avx2
+#define hairobb__v4_add hairobb__v4_add_avx2
+#define hairobb__v4_div hairobb__v4_div_avx2
+#define hairobb__v4_from_bytes hairobb__v4_from_bytes_avx2
+#define hairobb__v4_hmax hairobb__v4_hmax_avx2
+#define hairobb__v4_le_bits hairobb__v4_le_bits_avx2
+#define hairobb__v4_load hairobb__v4_load_avx2
+#define hairobb__v4_max hairobb__v4_max_avx2
+#define hairobb__v4_min hairobb__v4_min_avx2
+#define hairobb__v4_mul hairobb__v4_mul_avx2
+#define hairobb__v4_nonzero hairobb__v4_nonzero_avx2
+#define hairobb__v4_set1 hairobb__v4_set1_avx2
+#define hairobb__v4_store hairobb__v4_store_avx2
+#define hairobb__v4_sub hairobb__v4_sub_avx2
+#define hairobb__v4_transpose hairobb__v4_transpose_avx2
+#define hairobb__v8_add hairobb__v8_add_avx2
+#define hairobb__v8_div hairobb__v8_div_avx2
+#define hairobb__v8_from_bytes hairobb__v8_from_bytes_avx2
+#define hairobb__v8_le_bits hairobb__v8_le_bits_avx2
+#define hairobb__v8_load hairobb__v8_load_avx2
+#define hairobb__v8_max hairobb__v8_max_avx2
+#define hairobb__v8_min hairobb__v8_min_avx2
+#define hairobb__v8_mul hairobb__v8_mul_avx2
+#define hairobb__v8_nonzero hairobb__v8_nonzero_avx2
+#define hairobb__v8_set1 hairobb__v8_set1_avx2
+#define hairobb__v8_store hairobb__v8_store_avx2
+#define hairobb__v8_sub hairobb__v8_sub_avx2
+#undef HAIROBB__SSE41
+#define HAIROBB__SSE41 1
+#undef HAIROBB__AVX
+#define HAIROBB__AVX 1
+#undef HAIROBB__AVX2
+#define HAIROBB__AVX2 1
+#define HAIROBB__KERNEL_PASS 1
+#if defined(__clang__)
+#pragma clang attribute push(__attribute__((target("avx2"))), apply_to = function)
+#else
+#pragma GCC push_options
+#pragma GCC target("avx2")
+#endif
+#ifndef HAIROBB_SELF
+#define HAIROBB_SELF "hairobb.h"
+#endif
+#ifdef __has_include
+#if !__has_include(HAIROBB_SELF)
+#error "hairobb.h includes itself as HAIROBB_SELF for runtime dispatch: define HAIROBB_SELF to its file name, or HAIROBB_NO_DISPATCH"
+#endif
+#endif
+#include HAIROBB_SELF
+#if defined(__clang__)
+#pragma clang attribute pop
+#else
+#pragma GCC pop_options
+#endif
+#undef HAIROBB__KERNEL_PASS
+#endif /* HAIROBB__DISPATCH */
+
+#endif /* !HAIROBB__KERNEL_PASS */
+#endif /* HAIROBB_IMPLEMENTATION_DONE || HAIROBB__KERNEL_PASS */
 #endif /* HAIROBB_IMPLEMENTATION */
 
 /*

@@ -1,5 +1,6 @@
 /* test_simd.c - every SIMD path gives the same answers as the plain C path:
-   the same rays traced by three builds of hairobb.h (plain C, SSE, AVX),
+   the same rays traced by four builds of hairobb.h (plain C; SSE4.1; AVX2;
+   the x86-64 baseline, forced to SSE2 and dispatched to its AVX2 kernels),
    compared field by field, bit for bit, on several scenes, node policies and
    intersector precisions. */
 #define _POSIX_C_SOURCE 200809L
@@ -21,15 +22,47 @@ static int same_hit(const hairobb_hit *a, const hairobb_hit *b)
            memcmp(a->tangent, b->tangent, sizeof a->tangent) == 0;
 }
 
+typedef SIMD_VARIANT_SIGNATURE((*trace_fn));
+
+/* the copies are static: the test names the paths itself */
+static const char *path_name(hairobb_simd simd)
+{
+    static const char *names[] = {"auto", "plain C", "SSE2", "SSE4.1", "AVX", "AVX2"};
+    return (unsigned)simd < sizeof names / sizeof names[0] ? names[simd] : "?";
+}
+
+/* The paths compared with plain C: the copy that runs them, the path asked
+   for in options.simd, and the one the BVH must report. */
+typedef struct simd_path {
+    const char *name;
+    trace_fn trace;
+    hairobb_simd request, expect;
+    int needs_avx2;           /* compiled with -mavx2: runs only where the CPU has it */
+} simd_path;
+
 static void compare_paths(const hair_scene *s, const hairobb_build_options *options, const char *what)
 {
-    size_t n = (size_t)SIDE * SIDE, i, differ_sse = 0, differ_avx = 0, hits = 0;
+    size_t n = (size_t)SIDE * SIDE, i, hits = 0, differ[4] = {0, 0, 0, 0};
     float *org = (float *)malloc(3 * sizeof(float) * n), *dir = (float *)malloc(3 * sizeof(float) * n);
     hairobb_ray *rays = (hairobb_ray *)malloc(sizeof(hairobb_ray) * n);
     hairobb_hit *plain = (hairobb_hit *)malloc(sizeof(hairobb_hit) * n);
     hairobb_hit *other = (hairobb_hit *)malloc(sizeof(hairobb_hit) * n);
     int *occluded_plain = (int *)malloc(sizeof(int) * n), *occluded_other = (int *)malloc(sizeof(int) * n);
-    int have_avx = __builtin_cpu_supports("avx2");
+    int have_avx = __builtin_cpu_supports("avx2"), k;
+    hairobb_simd used = HAIROBB_SIMD_AUTO;
+    size_t visits[2];
+    simd_path paths[4];
+    hairobb_build_options asked = *options;
+
+    /* the x86-64 baseline copy has the AVX2 kernels too: AUTO picks them where the CPU has AVX2 */
+    paths[0].name = "SSE4.1"; paths[0].trace = trace_sse; paths[0].request = paths[0].expect = HAIROBB_SIMD_SSE41;
+    paths[1].name = "SSE2"; paths[1].trace = trace_dispatch; paths[1].request = paths[1].expect = HAIROBB_SIMD_SSE2;
+    paths[2].name = "AVX2 -mavx2"; paths[2].trace = trace_avx; paths[2].request = HAIROBB_SIMD_AUTO;
+    paths[2].expect = HAIROBB_SIMD_AVX2;
+    paths[3].name = "AVX2 dispatched"; paths[3].trace = trace_dispatch; paths[3].request = HAIROBB_SIMD_AUTO;
+    paths[3].expect = have_avx ? HAIROBB_SIMD_AVX2 : HAIROBB_SIMD_SSE2;
+    paths[0].needs_avx2 = paths[1].needs_avx2 = paths[3].needs_avx2 = 0;
+    paths[2].needs_avx2 = 1;
 
     scene_camera_rays(s, SIDE, SIDE, org, dir);
     for (i = 0; i < n; ++i) {
@@ -38,24 +71,30 @@ static void compare_paths(const hair_scene *s, const hairobb_build_options *opti
         rays[i].tnear = 0.0f;
         rays[i].tfar = INFINITY;
     }
-    CHECK(trace_plain(s->vertices, s->vertex_count, s->indices, s->segment_count, options, rays, n, plain, occluded_plain),
+    CHECK(trace_plain(s->vertices, s->vertex_count, s->indices, s->segment_count, options, rays, n, plain, occluded_plain, &used, visits),
           "%s %s: plain C build", s->name, what);
+    CHECK(used == HAIROBB_SIMD_NONE, "%s %s: plain C build traced with %s", s->name, what, path_name(used));
     for (i = 0; i < n; ++i) hits += plain[i].prim_id != HAIROBB_INVALID_ID;
     CHECK(hits > n / 20, "%s %s: %zu of %zu rays hit", s->name, what, hits, n);
 
-    CHECK(trace_sse(s->vertices, s->vertex_count, s->indices, s->segment_count, options, rays, n, other, occluded_other),
-          "%s %s: SSE build", s->name, what);
-    for (i = 0; i < n; ++i) differ_sse += !same_hit(&plain[i], &other[i]) || occluded_plain[i] != occluded_other[i];
-    CHECK(differ_sse == 0, "%s %s: SSE differs from plain C on %zu of %zu rays", s->name, what, differ_sse, n);
-
-    if (have_avx) {
-        CHECK(trace_avx(s->vertices, s->vertex_count, s->indices, s->segment_count, options, rays, n, other, occluded_other),
-              "%s %s: AVX build", s->name, what);
-        for (i = 0; i < n; ++i) differ_avx += !same_hit(&plain[i], &other[i]) || occluded_plain[i] != occluded_other[i];
-        CHECK(differ_avx == 0, "%s %s: AVX differs from plain C on %zu of %zu rays", s->name, what, differ_avx, n);
+    printf("%-8s %-33s %5zu hits of %zu rays; differ from plain C:", s->name, what, hits, n);
+    for (k = 0; k < 4; ++k) {
+        if (paths[k].needs_avx2 && !have_avx) { printf(" %s skipped (no AVX2),", paths[k].name); continue; }
+        asked.simd = paths[k].request;
+        used = HAIROBB_SIMD_AUTO;
+        CHECK(paths[k].trace(s->vertices, s->vertex_count, s->indices, s->segment_count, &asked, rays, n, other,
+                             occluded_other, &used, visits),
+              "%s %s: %s build", s->name, what, paths[k].name);
+        CHECK(used == paths[k].expect, "%s %s: %s traced with %s", s->name, what, paths[k].name, path_name(used));
+        /* the kernels that ran are the ones reported */
+        CHECK(visits[used == HAIROBB_SIMD_AVX2] > 0 && visits[used != HAIROBB_SIMD_AVX2] == 0,
+              "%s %s: %s reports %s, leaves reached by baseline/AVX2 kernels %zu/%zu", s->name, what, paths[k].name,
+              path_name(used), visits[0], visits[1]);
+        for (i = 0; i < n; ++i) differ[k] += !same_hit(&plain[i], &other[i]) || occluded_plain[i] != occluded_other[i];
+        CHECK(differ[k] == 0, "%s %s: %s differs from plain C on %zu of %zu rays", s->name, what, paths[k].name, differ[k], n);
+        printf(" %s (%s) %zu%s", paths[k].name, path_name(used), differ[k], k < 3 ? "," : "");
     }
-    printf("%-8s %-22s %5zu hits of %zu rays; SSE differs on %zu, AVX on %s%zu\n", s->name, what, hits, n, differ_sse,
-           have_avx ? "" : "(no AVX2 on this CPU, skipped) ", differ_avx);
+    printf("\n");
     free(org); free(dir); free(rays); free(plain); free(other); free(occluded_plain); free(occluded_other);
 }
 

@@ -993,6 +993,45 @@ static void test_bad_input(void)
     hairobb_free(bvh);
     hairobb_free(NULL);
     CHECK(strcmp(hairobb_result_string((hairobb_result)99), "unknown hairobb_result") == 0, "unknown result string");
+
+    /* options.simd: the compiler's baseline path, or AVX2 where the CPU has
+       it (dispatched where the baseline lacks it); any other is UNSUPPORTED */
+    {
+        int have_avx2 = __builtin_cpu_supports("avx2") != 0, k;
+        hairobb_simd baseline =
+#if defined(__AVX2__)
+            HAIROBB_SIMD_AVX2;
+#elif defined(__AVX__)
+            HAIROBB_SIMD_AVX;
+#elif defined(__SSE4_1__)
+            HAIROBB_SIMD_SSE41;
+#else
+            HAIROBB_SIMD_SSE2;
+#endif
+        for (k = HAIROBB_SIMD_AUTO; k <= HAIROBB_SIMD_AVX2; ++k) {
+            hairobb_simd asked = (hairobb_simd)k;
+            hairobb_simd expect = asked == HAIROBB_SIMD_AUTO ? (have_avx2 ? HAIROBB_SIMD_AVX2 : baseline) : asked;
+            int runs = asked == HAIROBB_SIMD_AUTO || asked == baseline || (asked == HAIROBB_SIMD_AVX2 && have_avx2);
+            hairobb_result r;
+            memset(&opt, 0, sizeof opt);
+            opt.simd = asked;
+            r = hairobb_build(vertices, 32, indices, n, &opt, &bvh);
+            if (runs) {
+                CHECK(r == HAIROBB_OK && hairobb_get_simd(bvh) == expect, "simd %s: %s, traces with %s",
+                      hairobb_simd_string(asked), hairobb_result_string(r), bvh ? hairobb_simd_string(hairobb_get_simd(bvh)) : "-");
+                hairobb_free(bvh);
+            } else {
+                CHECK(r == HAIROBB_ERROR_UNSUPPORTED && bvh == NULL, "simd %s: %s", hairobb_simd_string(asked),
+                      hairobb_result_string(r));
+            }
+        }
+        opt.simd = (hairobb_simd)(HAIROBB_SIMD_AVX2 + 1);
+        CHECK(hairobb_build(vertices, 32, indices, n, &opt, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT && bvh == NULL,
+              "simd out of range");
+        CHECK(hairobb_get_simd(NULL) == HAIROBB_SIMD_NONE, "simd of a NULL BVH");
+        CHECK(strcmp(hairobb_simd_string(HAIROBB_SIMD_SSE41), "SSE4.1") == 0 &&
+              strcmp(hairobb_simd_string((hairobb_simd)99), "unknown hairobb_simd") == 0, "simd names");
+    }
     free(vertices);
     free(indices);
 }
