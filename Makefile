@@ -3,7 +3,10 @@
 # the many test programs build on every core; the tests run one after another
 MAKEFLAGS += -j$(shell nproc 2>/dev/null || echo 2)
 CC       ?= cc
-ARCH     ?= -march=native
+# target flags: none by default, as a renderer's default build has it (the
+# x86-64 baseline, with the AVX2 kernels picked at run time); e.g.
+# ARCH=-march=native compiles everything for this CPU
+ARCH     ?=
 # no FMA contraction: the SIMD and plain C paths must round identically
 CFLAGS   ?= -O2 -g
 WARN      = -std=c99 -Wall -Wextra -pedantic

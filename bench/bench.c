@@ -125,18 +125,20 @@ typedef struct variant {
     int on_chart;        /* a point of the run time against error chart */
     unsigned build_threads; /* hairobb: 0 = every core */
     int hit_filter;      /* hairobb: a hit filter that takes every hit (what a set filter costs) */
+    hairobb_simd simd;   /* hairobb: the kernels' path (AUTO: the widest the CPU runs) */
 } variant;
 
 #define HAIROBB_ROW(key, label, nodes, layout, spatial, cluster, precision, pieces, on_chart) \
     {key, label, LIB_HAIROBB, HAIROBB_NODES_##nodes, HAIROBB_##layout, HAIROBB_PRECISION_##precision, pieces, \
-     HAIROBB_##spatial, HAIROBB_##cluster, 0, 0, 1, on_chart, 0, 0}
-/* the defaults built on one thread (the build's speed-up), or with a filter */
-#define HAIROBB_DEFAULTS_ROW(key, label, build_threads, hit_filter) \
+     HAIROBB_##spatial, HAIROBB_##cluster, 0, 0, 1, on_chart, 0, 0, HAIROBB_SIMD_AUTO}
+/* the defaults built on one thread (the build's speed-up), with a filter, or
+   traced by the SSE2 kernels (what CPUs without AVX2 get) */
+#define HAIROBB_DEFAULTS_ROW(key, label, build_threads, hit_filter, simd) \
     {key, label, LIB_HAIROBB, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 8, HAIROBB_AUTO, HAIROBB_AUTO, \
-     0, 0, 1, 0, build_threads, hit_filter}
+     0, 0, 1, 0, build_threads, hit_filter, HAIROBB_SIMD_##simd}
 #define EMBREE_ROW(key, label, type, rate, comparable, on_chart) \
     {key, label, LIB_EMBREE, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 0, HAIROBB_AUTO, HAIROBB_AUTO, \
-     type, rate, comparable, on_chart, 0, 0}
+     type, rate, comparable, on_chart, 0, 0, HAIROBB_SIMD_AUTO}
 static const variant all_variants[] = {
     /* precision points: exact and pieces-only intersectors, 4 to 16 pieces */
     HAIROBB_ROW("default", "hairobb default", MIXED, OBB_DEFAULT, AUTO, AUTO, EXACT, 8, 1),
@@ -155,8 +157,9 @@ static const variant all_variants[] = {
     /* other node layouts: one float rotation per node, the paper's compressed node (one byte rotation) */
     HAIROBB_ROW("shared", "hairobb shared rot.", MIXED, OBB_SHARED_ROTATION, OFF, OFF, EXACT, 8, 0),
     HAIROBB_ROW("compressed-shared", "hairobb compr. shared", MIXED, OBB_COMPRESSED, OFF, OFF, EXACT, 8, 0),
-    HAIROBB_DEFAULTS_ROW("build-1t", "hairobb built on 1t", 1, 0),
-    HAIROBB_DEFAULTS_ROW("filter", "hairobb + hit filter", 0, 1),
+    HAIROBB_DEFAULTS_ROW("build-1t", "hairobb built on 1t", 1, 0, AUTO),
+    HAIROBB_DEFAULTS_ROW("filter", "hairobb + hit filter", 0, 1, AUTO),
+    HAIROBB_DEFAULTS_ROW("sse2", "hairobb SSE2 path", 0, 0, SSE2),
     EMBREE_ROW("embree-r4", "Embree flat r4", EMB_FLAT_BEZIER, 4, 1, 1),
     EMBREE_ROW("embree-r8", "Embree flat r8", EMB_FLAT_BEZIER, 8, 1, 1),
     EMBREE_ROW("embree-r16", "Embree flat r16", EMB_FLAT_BEZIER, 16, 1, 1),
@@ -176,9 +179,9 @@ enum { ABLATION_ROWS = 9 };
 /* Named groups for --variants; "mixed" is the default variant by another name. */
 static const struct { const char *name, *members; } variant_groups[] = {
     {"all", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
-            "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,embree-r4,embree-r8,embree-r16,embree-round"},
+            "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2,embree-r4,embree-r8,embree-r16,embree-round"},
     {"hairobb", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
-                "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter"},
+                "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2"},
     {"embree", "embree-r4,embree-r8,embree-r16,embree-round"},
     {"precision", "default,exact4,exact16,pieces4,pieces8,pieces16"},
     {"ablation", "aabb,obb,mixed-uncompressed,spatial,spatial-compressed,spatial-compressed-cluster,shared,compressed-shared,default"},
@@ -726,6 +729,28 @@ static int take_every_hit(void *user, const hairobb_ray *ray, const hairobb_hit 
     return 1;
 }
 
+/* The SIMD paths this build of hairobb has on this CPU, and the one its
+   defaults pick (one segment built per path). */
+static const char *simd_paths(void)
+{
+    static const float vertices[16] = {0, 0, 0, 0.1f, 0, 0, 1, 0.1f, 0, 0, 2, 0.1f, 0, 0, 3, 0.1f};
+    static const uint32_t indices[1] = {0};
+    static char text[128];
+    hairobb_build_options build_options;
+    text[0] = '\0';
+    for (int k = HAIROBB_SIMD_AUTO; k <= HAIROBB_SIMD_AVX2; k++) {
+        hairobb_bvh *bvh = NULL;
+        memset(&build_options, 0, sizeof build_options);
+        build_options.simd = (hairobb_simd)k;
+        if (hairobb_build(vertices, 4, indices, 1, &build_options, &bvh) != HAIROBB_OK) continue;
+        snprintf(text + strlen(text), sizeof text - strlen(text), k == HAIROBB_SIMD_AUTO ? "%s (paths:" : " %s",
+                 hairobb_simd_string(hairobb_get_simd(bvh)));
+        hairobb_free(bvh);
+    }
+    snprintf(text + strlen(text), sizeof text - strlen(text), ")");
+    return text;
+}
+
 static hairobb_bvh *build_hairobb(const hair_scene *s, const variant *v, double *seconds)
 {
     hairobb_build_options build_options;
@@ -738,6 +763,7 @@ static hairobb_bvh *build_hairobb(const hair_scene *s, const variant *v, double 
     build_options.curve_pieces = v->curve_pieces;
     build_options.spatial_splits = v->spatial_splits;
     build_options.clustering = v->clustering;
+    build_options.simd = v->simd;
     hairobb_bvh *bvh = NULL;
     double start = scene_now();
     hairobb_result result =
@@ -1269,15 +1295,7 @@ static void print_machine(const options *o)
 #else
     printf(", flags: see Makefile (the $(B)/bench rule)");
 #endif
-#if defined(__AVX2__)
-    printf(", SIMD: AVX2\n");
-#elif defined(__AVX__)
-    printf(", SIMD: AVX\n");
-#elif defined(__SSE2__)
-    printf(", SIMD: SSE2\n");
-#else
-    printf(", SIMD: none\n");
-#endif
+    printf(", SIMD: %s\n", simd_paths());
     printf("hairobb %d.%d.%d, Embree %s; median of %d timed pass%s after 1 warm-up; blocks of %d rays "
            "interleaved across threads\n",
            HAIROBB_VERSION_MAJOR, HAIROBB_VERSION_MINOR, HAIROBB_VERSION_PATCH, RTC_VERSION_STRING, o->passes,
@@ -1309,7 +1327,8 @@ static void print_help(void)
            "                      hairobb: default (= mixed), exact4, exact16, pieces4, pieces8, pieces16,\n"
            "                        aabb, obb, mixed-uncompressed, spatial, spatial-compressed,\n"
            "                        spatial-compressed-cluster, shared, compressed-shared,\n"
-           "                        build-1t (defaults built on 1 thread), filter (a hit filter taking every hit)\n"
+           "                        build-1t (defaults built on 1 thread), filter (a hit filter taking every hit),\n"
+           "                        sse2 (the SSE2 kernels, where the build has them: not with -mavx2 or -march)\n"
            "                      Embree: embree-r4, embree-r8, embree-r16 (flat), embree-round\n"
            "                      groups: all, hairobb, embree, precision, ablation\n"
            "  --passes N          timed passes per measurement, median reported (default %d, 3..64)\n"
