@@ -129,6 +129,12 @@
                              may show it the joint on both segments. NULL
                              (default): +0.4-0.5% instructions per ray,
                              below timing noise (callgrind, bench).
+     simd                    HAIROBB_SIMD_AUTO (default): the widest path
+                             the build has and the CPU runs (SIMD PATHS);
+                             a path named forces it (comparisons, tests),
+                             HAIROBB_ERROR_UNSUPPORTED where the build
+                             lacks it or the CPU cannot run it.
+                             hairobb_get_simd(bvh) tells a BVH's path.
 
    HITS
      hairobb_hit: t, u, v as above; Ng the ribbon's unit normal facing the ray
@@ -153,6 +159,18 @@
      disagree is HAIROBB_ERROR_INVALID_FILE; NaN, Inf or negative thickness
      HAIROBB_ERROR_INVALID_GEOMETRY.
 
+   SIMD PATHS
+     The traversal and intersector exist in plain C, SSE2, SSE4.1, AVX and
+     AVX2 versions, which give the same hits bit for bit (no FMA). The
+     compiler's target picks one (-msse4.1, -mavx2, -march=...). Where that
+     target lacks AVX2, gcc 5+ and clang 4+ on x86 compile the kernels a
+     second time for AVX2 (target pragmas; no flag needed), and
+     hairobb_build picks them where the CPU runs AVX2: a plain `cc -O2`
+     build traces as fast as -march=native. For that the file includes
+     itself by its name: keep it hairobb.h, or define HAIROBB_SELF.
+     HAIROBB_NO_DISPATCH turns the second copy off. There is no AVX-512
+     path.
+
    THREAD SAFETY
      hairobb_intersect1/hairobb_occluded1 only read the BVH: any number of
      threads may trace one BVH at once. There is no global state.
@@ -167,10 +185,12 @@
      HAIROBB_NO_THREADS      build on the calling thread only. Otherwise, on
                              POSIX systems, the build uses pthreads: link
                              with -pthread (glibc 2.34 and later need nothing).
+     HAIROBB_NO_DISPATCH     no AVX2 copy of the kernels (SIMD PATHS).
+     HAIROBB_SELF            the file's name as the runtime dispatch includes
+                             it again, default "hairobb.h".
      HAIROBB_NODE_WIDTH      children per node, 4 or 8; default 8 where the
-                             compiler targets AVX, else 4.
-     SSE is used on x86-64; AVX for the 8-wide curve evaluation when the
-     compiler targets it (-mavx or -march=...).
+                             compiler targets AVX or the AVX2 copy is
+                             compiled in, else 4.
 
    ERRORS
      hairobb_build returns a hairobb_result; hairobb_result_string names it.
