@@ -110,6 +110,16 @@
                              calling thread only; at most 256. Every thread
                              count builds the same tree (the top levels on
                              the calling thread, then independent subtrees).
+     parallel_for, _user     a renderer's task system instead of the
+                             library's threads (`threads` is then unused;
+                             works with HAIROBB_NO_THREADS too): the
+                             independent subtrees (tens to hundreds) go to
+                             parallel_for(user, count, run, context) as
+                             one call of run(context, i) each. The same
+                             tree again. While they run, progress is not
+                             reported and a cancel waits for their end.
+                             A parallel_for that skips an index gives
+                             HAIROBB_ERROR_INVALID_ARGUMENT.
      basis, tangents         HAIROBB_BASIS_BEZIER (default) reads 4 control
                              points from indices[i]. _BSPLINE, _CATMULL_ROM
                              (4 points), _HERMITE (2 points, their
@@ -286,6 +296,12 @@ typedef enum hairobb_simd {
     HAIROBB_SIMD_AVX2
 } hairobb_simd;
 
+/* A renderer's own task system for the build (options.parallel_for): it
+   calls run(context, i) once for each i in [0, count), on any threads and
+   in any order, and returns when every call has returned. */
+typedef void (*hairobb_task_fn)(void *context, unsigned index);
+typedef void (*hairobb_parallel_for_fn)(void *user, unsigned count, hairobb_task_fn run, void *context);
+
 struct hairobb_ray;
 struct hairobb_hit;
 /* An any-hit filter: called for each hit a ray finds before it is taken
@@ -314,6 +330,8 @@ typedef struct hairobb_build_options {
     hairobb_filter_fn hit_filter;    /* NULL: every hit counts */
     void *hit_filter_user;
     hairobb_simd simd;               /* HAIROBB_SIMD_AUTO, or a path to force */
+    hairobb_parallel_for_fn parallel_for; /* NULL: the library's threads (see `threads`) */
+    void *parallel_for_user;
 } hairobb_build_options;
 
 typedef struct hairobb_bvh hairobb_bvh;
@@ -1207,6 +1225,7 @@ typedef struct hairobb__task {
     size_t node_bytes, node_delta;    /* node_delta: where its nodes went in the final memory */
     hairobb_stats stats;
     hairobb_result error;
+    int ran;                          /* a user's parallel_for must run each task */
 } hairobb__task;
 
 /* Control points (x, y, z, r each) of the reference at position i: the
@@ -2119,6 +2138,7 @@ static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task)
     task->node_bytes = local.node_bytes;
     task->stats = local.stats;
     task->error = local.error;
+    task->ran = 1;
 }
 
 /* Tasks are handed out in order; the calling thread reports progress and
@@ -2177,9 +2197,54 @@ static void *hairobb__worker(void *pool)
 }
 #endif
 
-/* Runs every task on up to `threads` threads (0: one per core); the first
-   failure, or a cancel, is left in b->error. */
-static void hairobb__run_tasks(hairobb__builder *b, unsigned threads)
+/* One task, called by a user's parallel_for. */
+static void hairobb__run_task_at(void *pool, unsigned index)
+{
+    hairobb__pool *p = HAIROBB__CAST(hairobb__pool *, pool);
+    if (index < p->b->task_count) hairobb__run_task(&p->shared, &p->b->tasks[index]);
+}
+
+/* The tasks through a user's parallel_for, then their progress at once. */
+static void hairobb__run_tasks_for(hairobb__pool *pool, hairobb_parallel_for_fn parallel_for, void *user)
+{
+    hairobb__builder *b = pool->b;
+    size_t k, positions = 0;
+    parallel_for(user, (unsigned)b->task_count, hairobb__run_task_at, pool);
+    for (k = 0; k < b->task_count; ++k) {
+        if (!b->tasks[k].ran) { b->error = HAIROBB_ERROR_INVALID_ARGUMENT; return; }
+        positions += b->tasks[k].range.cap - b->tasks[k].range.begin;
+    }
+    hairobb__finish_positions(b, positions);
+}
+
+/* The tasks on up to `threads` threads (0: one per core), the calling
+   thread among them. */
+static void hairobb__run_tasks_on_threads(hairobb__pool *pool, unsigned threads)
+{
+#if HAIROBB__THREADS
+    hairobb__builder *b = pool->b;
+    if (threads == 0) {
+        long cores = sysconf(_SC_NPROCESSORS_ONLN);
+        threads = cores < 1 ? 1u : cores > 256 ? 256u : (unsigned)cores;
+    }
+    if (threads > b->task_count) threads = b->task_count ? (unsigned)b->task_count : 1u;
+    if (threads > 1 && pthread_mutex_init(&pool->lock, NULL) == 0) {
+        pthread_t workers[255];
+        unsigned started = 0, i;
+        while (started < threads - 1 && pthread_create(&workers[started], NULL, hairobb__worker, pool) == 0) ++started;
+        hairobb__work(pool, 1);      /* fewer threads than asked, if some would not start */
+        for (i = 0; i < started; ++i) pthread_join(workers[i], NULL);
+        pthread_mutex_destroy(&pool->lock);
+        return;
+    }
+#endif
+    (void)threads;
+    hairobb__work(pool, 1);
+}
+
+/* Runs every task; the first failure, or a cancel, is left in b->error. */
+static void hairobb__run_tasks(hairobb__builder *b, unsigned threads, hairobb_parallel_for_fn parallel_for,
+                               void *parallel_for_user)
 {
     hairobb__pool pool;
     size_t k;
@@ -2187,26 +2252,10 @@ static void hairobb__run_tasks(hairobb__builder *b, unsigned threads)
     pool.b = b;
     pool.positions_done = b->positions_done;    /* leaves of the top part */
     pool.shared = *b;
-#if HAIROBB__THREADS
-    if (threads == 0) {
-        long cores = sysconf(_SC_NPROCESSORS_ONLN);
-        threads = cores < 1 ? 1u : cores > 256 ? 256u : (unsigned)cores;
-    }
-    if (threads > b->task_count) threads = b->task_count ? (unsigned)b->task_count : 1u;
-    if (threads > 1 && pthread_mutex_init(&pool.lock, NULL) == 0) {
-        pthread_t workers[255];
-        unsigned started = 0, i;
-        while (started < threads - 1 && pthread_create(&workers[started], NULL, hairobb__worker, &pool) == 0) ++started;
-        hairobb__work(&pool, 1);      /* fewer threads than asked, if some would not start */
-        for (i = 0; i < started; ++i) pthread_join(workers[i], NULL);
-        pthread_mutex_destroy(&pool.lock);
-    } else {
-        hairobb__work(&pool, 1);
-    }
-#else
-    (void)threads;
-    hairobb__work(&pool, 1);
-#endif
+    if (parallel_for && b->task_count)
+        hairobb__run_tasks_for(&pool, parallel_for, parallel_for_user);
+    else
+        hairobb__run_tasks_on_threads(&pool, threads);
     for (k = 0; k < b->task_count && b->error == HAIROBB_OK; ++k) b->error = b->tasks[k].error;
     if (b->error == HAIROBB_OK && pool.stop) b->error = HAIROBB_ERROR_CANCELLED;
 }
@@ -2389,7 +2438,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
        tasks; the limit depends on the input alone (same tree on any thread count) */
     b.task_limit = segment_count / HAIROBB__TASKS > HAIROBB__TASK_MIN ? segment_count / HAIROBB__TASKS : HAIROBB__TASK_MIN;
     bvh->root = hairobb__build_range(&b, &root, 0, tries);
-    if (b.error == HAIROBB_OK) hairobb__run_tasks(&b, opt.threads);
+    if (b.error == HAIROBB_OK) hairobb__run_tasks(&b, opt.threads, opt.parallel_for, opt.parallel_for_user);
     if (b.error == HAIROBB_OK) hairobb__gather_tasks(&b);
     if (b.error != HAIROBB_OK) goto failed;
     if (b.progress && b.progress(b.progress_user, 1.0f)) { b.error = HAIROBB_ERROR_CANCELLED; goto failed; }

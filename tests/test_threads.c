@@ -1,7 +1,9 @@
 /* test_threads.c - threads, black-box: a build on several threads gives the
    tree of a build on one (same statistics, same memory, the same hits to the
-   bit), and several threads tracing one BVH at once get exactly what one
-   thread gets. `make test` also runs it under ThreadSanitizer. */
+   bit), so do builds through a user's parallel_for (the test's own task
+   system on 3 threads, and one running the tasks backwards), and several
+   threads tracing one BVH at once get exactly what one thread gets. `make
+   test` also runs it under ThreadSanitizer. */
 #define _POSIX_C_SOURCE 200809L
 #include <pthread.h>
 #include <stdlib.h>
@@ -38,6 +40,57 @@ static void *tracer(void *job)
 {
     trace_all((trace_job *)job);
     return NULL;
+}
+
+/* A user's task system: 3 threads take the next index under a lock. */
+typedef struct task_pool {
+    pthread_mutex_t lock;
+    unsigned next, count, calls;
+    hairobb_task_fn run;
+    void *context;
+} task_pool;
+
+static void *pool_thread(void *arg)
+{
+    task_pool *pool = (task_pool *)arg;
+    for (;;) {
+        unsigned index;
+        pthread_mutex_lock(&pool->lock);
+        index = pool->next < pool->count ? pool->next++ : pool->count;
+        if (index < pool->count) pool->calls++;
+        pthread_mutex_unlock(&pool->lock);
+        if (index >= pool->count) return NULL;
+        pool->run(pool->context, index);
+    }
+}
+
+static unsigned last_task_count;    /* what the last parallel_for was asked for */
+
+static void for_on_threads(void *user, unsigned count, hairobb_task_fn run, void *context)
+{
+    task_pool pool;
+    pthread_t threads[3];
+    int t, started = 0;
+    (void)user;
+    memset(&pool, 0, sizeof pool);
+    pthread_mutex_init(&pool.lock, NULL);
+    pool.count = count;
+    pool.run = run;
+    pool.context = context;
+    for (t = 0; t < 3; ++t) started += pthread_create(&threads[t], NULL, pool_thread, &pool) == 0;
+    if (started == 0) pool_thread(&pool);
+    for (t = 0; t < started; ++t) pthread_join(threads[t], NULL);
+    pthread_mutex_destroy(&pool.lock);
+    last_task_count = pool.calls == count ? count : 0;
+}
+
+/* Every index on the calling thread, last first. */
+static void for_backwards(void *user, unsigned count, hairobb_task_fn run, void *context)
+{
+    unsigned i;
+    (void)user;
+    for (i = count; i > 0; --i) run(context, i - 1);
+    last_task_count = count;
 }
 
 /* Bitwise: identical trees and identical code must give identical floats. */
@@ -92,8 +145,30 @@ static void check_scene(hair_scene *s, const hairobb_build_options *base, const 
         CHECK(differ == 0, "%s %s: tracing thread %d differs from one thread on %d of %d rays", s->name, what, t,
               differ, RAYS);
     }
-    printf("%s, %s: %zu segments, %d of %d rays hit; 1- and 4-thread builds equal; %d threads traced alike\n", s->name,
-           what, s->segment_count, hits, RAYS, started);
+    /* a user's task system: the same tree */
+    for (t = 0; t < 2; ++t) {
+        static const char *systems[] = {"parallel_for on 3 threads", "parallel_for backwards"};
+        hairobb_bvh *user_built = NULL;
+        hairobb_stats stats;
+        options.threads = 0;
+        options.parallel_for = t == 0 ? for_on_threads : for_backwards;
+        last_task_count = 0;
+        CHECK(hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, &options, &user_built) == HAIROBB_OK,
+              "%s %s: build through %s", s->name, what, systems[t]);
+        if (!user_built) continue;
+        CHECK(last_task_count >= 16, "%s %s: %s ran %u tasks", s->name, what, systems[t], last_task_count);
+        hairobb_get_stats(user_built, &stats);
+        jobs[0].bvh = user_built; jobs[0].org = org; jobs[0].dir = dir;
+        trace_all(&jobs[0]);
+        i = same_results(&reference, &jobs[0]);
+        CHECK(memcmp(&serial_stats, &stats, sizeof stats) == 0 && hairobb_memory_bytes(serial) == hairobb_memory_bytes(user_built) &&
+              i == 0, "%s %s: %s gives another tree (%zu / %zu bytes, %d rays differ)", s->name, what, systems[t],
+              hairobb_memory_bytes(serial), hairobb_memory_bytes(user_built), i);
+        hairobb_free(user_built);
+    }
+    options.parallel_for = NULL;
+    printf("%s, %s: %zu segments, %d of %d rays hit; 1- and 4-thread builds and both parallel_for builds (%u tasks) equal; "
+           "%d threads traced alike\n", s->name, what, s->segment_count, hits, RAYS, last_task_count, started);
 done:
     hairobb_free(serial);
     hairobb_free(parallel);

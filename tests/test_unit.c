@@ -1072,6 +1072,18 @@ static int cancel_progress(void *user, float fraction)
    and the closing call gives CANCELLED, no BVH, no leak and no call after
    the cancelling one; with both a cancel and a failing allocation, the
    result is that of the one that came (either, if both did). */
+/* A user's parallel_for: the tasks on the calling thread, last first, or
+   (skip_first) all but task 0, which breaks its contract. */
+static int skip_first;
+static unsigned parallel_for_calls;
+static void for_backwards(void *user, unsigned count, hairobb_task_fn run, void *context)
+{
+    unsigned i;
+    (void)user;
+    parallel_for_calls++;
+    for (i = count; i > (skip_first ? 1u : 0u); --i) run(context, i - 1);
+}
+
 static void test_allocation_failure(void)
 {
     static const struct {
@@ -1079,10 +1091,12 @@ static void test_allocation_failure(void)
         int scene;
         hairobb_obb_layout layout;
         hairobb_switch spatial, clustering;
+        int parallel_for;
     } configs[] = {
-        {"default options", 0, HAIROBB_OBB_DEFAULT, HAIROBB_AUTO, HAIROBB_AUTO},
-        {"spatial splits", 1, HAIROBB_OBB_COMPRESSED, HAIROBB_ON, HAIROBB_OFF},
-        {"spatial splits and clustering, per-child OBBs", 1, HAIROBB_OBB_PER_CHILD, HAIROBB_ON, HAIROBB_ON},
+        {"default options", 0, HAIROBB_OBB_DEFAULT, HAIROBB_AUTO, HAIROBB_AUTO, 0},
+        {"spatial splits", 1, HAIROBB_OBB_COMPRESSED, HAIROBB_ON, HAIROBB_OFF, 0},
+        {"spatial splits and clustering, per-child OBBs", 1, HAIROBB_OBB_PER_CHILD, HAIROBB_ON, HAIROBB_ON, 0},
+        {"default options through a parallel_for", 0, HAIROBB_OBB_DEFAULT, HAIROBB_AUTO, HAIROBB_AUTO, 1},
     };
     static const char *when_names[] = {"the first call", "the first call past 1/2", "the call with 1"};
     float *vertices[2];
@@ -1091,7 +1105,7 @@ static void test_allocation_failure(void)
     int c;
     make_scene(counts[0], &vertices[0], &indices[0]);
     make_crossed_scene(counts[1], &vertices[1], &indices[1]);
-    for (c = 0; c < 3; ++c) {
+    for (c = 0; c < 4; ++c) {
         const char *name = configs[c].name;
         size_t n = counts[configs[c].scene];
         const float *v = vertices[configs[c].scene];
@@ -1111,7 +1125,11 @@ static void test_allocation_failure(void)
         opt.spatial_split_budget = 1.0f;
         opt.clustering = configs[c].clustering;
         opt.allocator_user = &counter;
+        opt.parallel_for = configs[c].parallel_for ? for_backwards : NULL;
+        parallel_for_calls = 0;
         CHECK(hairobb_build(v, 4 * n, ix, n, &opt, &bvh) == HAIROBB_OK, "%s: counting build", name);
+        CHECK(parallel_for_calls == (unsigned)configs[c].parallel_for, "%s: parallel_for called %u times", name,
+              parallel_for_calls);
         allocations = counter.calls;
         hairobb_get_stats(bvh, &stats);
         hairobb_free(bvh);
@@ -1186,6 +1204,23 @@ static void test_allocation_failure(void)
             if (r == HAIROBB_OK) hairobb_free(bvh);
         }
         CHECK(both_right, "%s: a failing allocation and a cancel: the result of the one that came, no BVH, no leak", name);
+    }
+    /* a parallel_for that skips a task: an error, not a tree with a hole */
+    {
+        test_allocator a;
+        hairobb_build_options opt;
+        hairobb_bvh *bvh = (hairobb_bvh *)&a;
+        hairobb_result r;
+        memset(&a, 0, sizeof a);
+        a.fail_at = -1;
+        memset(&opt, 0, sizeof opt);
+        opt.allocator_user = &a;
+        opt.parallel_for = for_backwards;
+        skip_first = 1;
+        r = hairobb_build(vertices[0], 4 * counts[0], indices[0], counts[0], &opt, &bvh);
+        skip_first = 0;
+        CHECK(r == HAIROBB_ERROR_INVALID_ARGUMENT && bvh == NULL && a.live == 0 && a.bad_frees == 0,
+              "parallel_for skipping a task: %s, %ld blocks live", hairobb_result_string(r), a.live);
     }
     free(vertices[0]);
     free(indices[0]);
