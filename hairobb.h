@@ -176,9 +176,9 @@
      target lacks AVX2, gcc 5+ and clang 4+ on x86 compile the kernels a
      second time for AVX2 (target pragmas; no flag needed), and
      hairobb_build picks them where the CPU runs AVX2: a plain `cc -O2`
-     build traced within 2% of -march=native and 1.55x faster than its
-     SSE2 kernels (bench, README). For that the file includes itself by
-     its name: keep it hairobb.h, or define HAIROBB_SELF.
+     build traced within 2% of -march=native, 1.55x faster than the same
+     build without the AVX2 copy (bench, README). For that the file
+     includes itself by its name: keep it hairobb.h, or define HAIROBB_SELF.
      HAIROBB_NO_DISPATCH turns the second copy off. There is no AVX-512
      path.
 
