@@ -1,11 +1,11 @@
 /* render.c - a small hair renderer on hairobb: one .hair file (or a built-in
    fur ball), a pinhole camera framing its bounds, 2x2 samples per pixel,
-   Kajiya-Kay shading under two directional lights with ray-traced shadows,
-   a PNG out.
+   Kajiya-Kay shading under two directional lights with ray-traced shadows
+   through translucent hair (a hit filter), a PNG out.
 
        render [file.hair] [-o out.png] [-w width] [-h height]
 
-   Build: cc -std=c99 -O2 -march=native -I. examples/render.c -o render -lm -pthread
+   Build: cc -std=c99 -O2 -I. examples/render.c -o render -lm -pthread
    (needs stb_image_write.h: Debian's libstb-dev). */
 #define _POSIX_C_SOURCE 200809L   /* clock_gettime, sysconf under -std=c99 */
 #define HAIROBB_IMPLEMENTATION
@@ -100,6 +100,26 @@ static struct {
     pthread_mutex_t lock; int next_row, rows_done; long rays, hits;
 } R;
 
+/* Shadow rays pass through hair: each strand crossed lets this share of the
+   light through (a crude stand-in for the scattering that keeps light hair
+   bright inside). The hit filter sees every strand a ray crosses, with the
+   ray the tracer was given, so the ray carries its own tally. */
+#define STRAND_TRANSMITTANCE 0.55f
+typedef struct {
+    hairobb_ray ray;      /* first: the filter gets &ray back */
+    int is_shadow;
+    float transmitted;    /* shadow rays: the share of light left */
+} traced_ray;
+
+static int through_hair(void *user, const hairobb_ray *ray, const hairobb_hit *hit)
+{
+    traced_ray *r = (traced_ray *)(void *)ray;
+    (void)user; (void)hit;
+    if (!r->is_shadow) return 1;                 /* camera rays: the nearest hit */
+    r->transmitted *= STRAND_TRANSMITTANCE;
+    return r->transmitted < 0.01f;               /* nearly dark: take it and stop */
+}
+
 /* Distance along the ray to the fur ball's body, or INFINITY. */
 static float skin_hit(const float o[3], const float d[3], float tmax)
 {
@@ -112,9 +132,10 @@ static float skin_hit(const float o[3], const float d[3], float tmax)
 /* Radiance of one camera ray; *rays counts the rays traced. */
 static void shade(const float dir[3], float out[3], long *rays, int *hit_any)
 {
-    hairobb_ray ray = {{R.eye[0], R.eye[1], R.eye[2]}, 0.0f, {dir[0], dir[1], dir[2]}, INFINITY};
+    traced_ray camera = {{{R.eye[0], R.eye[1], R.eye[2]}, 0.0f, {dir[0], dir[1], dir[2]}, INFINITY}, 0, 1.0f};
+    hairobb_ray ray = camera.ray;
     hairobb_hit hit;
-    int is_hair = hairobb_intersect1(R.bvh, &ray, &hit), l, k;
+    int is_hair = hairobb_intersect1(R.bvh, &camera.ray, &hit), l, k;
     float ts = skin_hit(ray.org, dir, is_hair ? hit.t : INFINITY), V[3] = {-dir[0], -dir[1], -dir[2]};
     float base[3], T[3], P[3];
     ++*rays;
@@ -128,12 +149,12 @@ static void shade(const float dir[3], float out[3], long *rays, int *hit_any)
         for (k = 0; k < 3; k++) P[k] = R.eye[k] + ts * dir[k];
         for (k = 0; k < 3; k++) out[k] = 0.02f;
         for (l = 0; l < 2; l++) {
-            hairobb_ray sh = {{P[0], P[1], P[2]}, 1e-4f, {R.light[l][0], R.light[l][1], R.light[l][2]}, INFINITY};
+            traced_ray sh = {{{P[0], P[1], P[2]}, 1e-4f, {R.light[l][0], R.light[l][1], R.light[l][2]}, INFINITY}, 1, 1.0f};
             float ndl = dot3(P, R.light[l]) / R.sc->skin;
             if (ndl <= 0) continue;
             ++*rays;
-            if (!hairobb_occluded1(R.bvh, &sh))
-                for (k = 0; k < 3; k++) out[k] += 0.15f * ndl * R.light_color[l][k];
+            if (hairobb_occluded1(R.bvh, &sh.ray)) sh.transmitted = 0.0f;
+            for (k = 0; k < 3; k++) out[k] += 0.15f * ndl * sh.transmitted * R.light_color[l][k];
         }
         return;
     }
@@ -152,12 +173,11 @@ static void shade(const float dir[3], float out[3], long *rays, int *hit_any)
         float cl = dot3(T, L), cv = dot3(T, V), sl = sqrtf(fmaxf(0, 1 - cl * cl)), sv = sqrtf(fmaxf(0, 1 - cv * cv));
         float spec = powf(fmaxf(0, sl * sv - cl * cv), 80.0f), lit;
         /* The shadow ray starts at the hit and names it, so the ribbon it
-           leaves is skipped while touching hairs still shadow it. */
-        hairobb_ray sh = {{P[0], P[1], P[2]}, 0.0f, {L[0], L[1], L[2]}, INFINITY};
-        /* Hair lets light through: a shadowed hair keeps a tenth (a crude
-           stand-in for the multiple scattering that keeps blond hair bright). */
+           leaves is skipped while touching hairs still shadow it; the
+           filter dims it by each strand it crosses. */
+        traced_ray sh = {{{P[0], P[1], P[2]}, 0.0f, {L[0], L[1], L[2]}, INFINITY}, 1, 1.0f};
         if (skin_hit(P, L, INFINITY) < INFINITY) lit = 0.0f;
-        else { ++*rays; lit = hairobb_occluded1_from(R.bvh, &hit, &sh) ? 0.1f : 1.0f; }
+        else { ++*rays; lit = hairobb_occluded1_from(R.bvh, &hit, &sh.ray) ? 0.0f : sh.transmitted; }
         for (k = 0; k < 3; k++)
             out[k] += lit * R.light_color[l][k] * (0.7f * base[k] * sl + 0.6f * spec * (0.4f + 0.6f * base[k]));
     }
@@ -214,6 +234,7 @@ int main(int argc, char **argv)
     hairobb_hair hair;
     scene sc;
     hairobb_bvh *bvh;
+    hairobb_build_options options;
     hairobb_result res;
     pthread_t th[MAX_THREADS];
     float lo[3], hi[3], center[3], radius, dist, world_up[3] = {0, 0, 1};
@@ -249,7 +270,9 @@ int main(int argc, char **argv)
     }
 
     t0 = now();
-    res = hairobb_build(sc.vertices, sc.vertex_count, sc.indices, sc.segment_count, NULL, &bvh);
+    memset(&options, 0, sizeof options);
+    options.hit_filter = through_hair;
+    res = hairobb_build(sc.vertices, sc.vertex_count, sc.indices, sc.segment_count, &options, &bvh);
     t_build = now() - t0;
     if (res != HAIROBB_OK) { fprintf(stderr, "hairobb_build: %s\n", hairobb_result_string(res)); return 1; }
 
