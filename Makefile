@@ -146,8 +146,12 @@ compile-matrix: | $(B)
 	  $$cc $(WARN) -Werror -O2 '-DHAIROBB_SELF="third_party_hair.h"' -c $(B)/matrix_renamed.c -o $(B)/matrix.o; \
 	  echo "compile-matrix: $$cc with the header renamed (HAIROBB_SELF) clean"; done
 
-test: deps $(TESTS) $(SANITIZED) compile-matrix examples $(B)/run_examples
-	@sh tests/run_all.sh $(TESTS) $(SANITIZED) $(B)/run_examples
+# the AVX2 kernels of the dispatch build call no baseline code (objdump)
+$(B)/check_dispatch_calls: tests/check_dispatch_calls.sh $(B)/simd_dispatch_w8.o
+	@printf '#!/bin/sh\nexec sh tests/check_dispatch_calls.sh $(B)/simd_dispatch_w8.o\n' > $@ && chmod +x $@
+
+test: deps $(TESTS) $(SANITIZED) compile-matrix examples $(B)/run_examples $(B)/check_dispatch_calls
+	@sh tests/run_all.sh $(TESTS) $(SANITIZED) $(B)/run_examples $(B)/check_dispatch_calls
 
 bench: $(B)/bench
 	$(B)/bench

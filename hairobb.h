@@ -581,9 +581,18 @@ HAIROBB_DEF void hairobb_hair_free(hairobb_hair *hair);
 /* ------------------------------------------------------------------------ */
 /* Small vector helpers                                                      */
 /* ------------------------------------------------------------------------ */
-static inline float hairobb__minf(float a, float b) { return a < b ? a : b; }
-static inline float hairobb__maxf(float a, float b) { return a > b ? a : b; }
-static float hairobb__dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+/* Helpers the kernels call are always inlined: inside the AVX2 copy they are
+   then compiled for AVX2 too. A call from AVX2 code into SSE code (without
+   the VEX encoding) made the pieces intersector and the shared-rotation
+   nodes 2x slower (bench, AMD EPYC). */
+#if defined(__GNUC__) || defined(__clang__)
+#define HAIROBB__INLINE static inline __attribute__((always_inline))
+#else
+#define HAIROBB__INLINE static inline
+#endif
+HAIROBB__INLINE float hairobb__minf(float a, float b) { return a < b ? a : b; }
+HAIROBB__INLINE float hairobb__maxf(float a, float b) { return a > b ? a : b; }
+HAIROBB__INLINE float hairobb__dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 /* Rows 0,1 span the plane orthogonal to n (unit), row 2 = n, right-handed
    (row0 x row1 = row2). Branch-free basis of Duff et al. 2017. */
@@ -640,7 +649,7 @@ static inline void hairobb__box_grow(float lower[3], float upper[3], const float
 }
 
 /* Cubic Bezier value and first two derivatives at u. */
-static float hairobb__bezier(const float c[4], float u, float *d1, float *d2)
+HAIROBB__INLINE float hairobb__bezier(const float c[4], float u, float *d1, float *d2)
 {
     float s = 1.0f - u;
     float e0 = c[1] - c[0], e1 = c[2] - c[1], e2 = c[3] - c[2];
@@ -657,7 +666,7 @@ static float hairobb__bezier4(const float *cp, int k, float u)
     return hairobb__bezier(c, u, NULL, NULL);
 }
 
-static int hairobb__lowest_bit(unsigned bits)
+HAIROBB__INLINE int hairobb__lowest_bit(unsigned bits)
 {
 #if defined(__GNUC__) || defined(__clang__)
     return __builtin_ctz(bits);
@@ -1889,7 +1898,7 @@ static void hairobb__store_obb(hairobb__obb_node *node, int lane, const float fr
 /* The frame a compressed node's bytes decode to: the rotation times 127,
    left unscaled (slab distances do not change with the scale, and the
    traversal saves the multiplies); both builder and traversal use it. */
-static void hairobb__decode_rotation(const signed char q[9], float frame[9])
+HAIROBB__INLINE void hairobb__decode_rotation(const signed char q[9], float frame[9])
 {
     int k;
     for (k = 0; k < 9; ++k) frame[k] = (float)q[k];
@@ -2528,11 +2537,6 @@ HAIROBB_DEF void hairobb_bounds(const hairobb_bvh *bvh, float lower[3], float up
 /* ------------------------------------------------------------------------ */
 /* Rays: what every traversal path reads                                   */
 /* ------------------------------------------------------------------------ */
-#if defined(__GNUC__) || defined(__clang__)
-#define HAIROBB__INLINE static inline __attribute__((always_inline))
-#else
-#define HAIROBB__INLINE static inline
-#endif
 
 /* A ray prepared for slab tests against boxes in one frame. */
 typedef struct hairobb__slab_ray {
@@ -2571,7 +2575,7 @@ typedef struct hairobb__ray_state {
 
 /* org and dir given in the slab frame; zero direction components become
    +-tiny, so 1/dir stays finite for rays parallel to a slab. */
-static void hairobb__slab_setup(hairobb__slab_ray *slab, const float org[3], const float dir[3])
+HAIROBB__INLINE void hairobb__slab_setup(hairobb__slab_ray *slab, const float org[3], const float dir[3])
 {
     int k;
     for (k = 0; k < 3; ++k) {
