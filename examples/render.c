@@ -303,8 +303,9 @@ int main(int argc, char **argv)
     for (t = 0; t < threads; t++) pthread_create(&th[t], NULL, worker, NULL);
     for (t = 0; t < threads; t++) pthread_join(th[t], NULL);
     t_trace = now() - t0;
-    fprintf(stderr, "\rbuild %.3f s, trace %.3f s, %.2f Mrays/s (%ld rays), %.1f%% of pixels hit\n",
-            t_build, t_trace, R.rays / t_trace * 1e-6, R.rays, 100.0 * R.hits / ((double)R.w * R.h));
+    fprintf(stderr, "\rbuild %.3f s, trace %.3f s (%s, %d threads), %.2f Mrays/s (%ld rays), %.1f%% of pixels hit\n",
+            t_build, t_trace, hairobb_simd_string(hairobb_get_simd(bvh)), threads, R.rays / t_trace * 1e-6, R.rays,
+            100.0 * R.hits / ((double)R.w * R.h));
 
     if (!stbi_write_png(out, R.w, R.h, 3, R.pixels, R.w * 3)) { fprintf(stderr, "cannot write %s\n", out); return 1; }
     fprintf(stderr, "wrote %s (%dx%d)\n", out, R.w, R.h);
