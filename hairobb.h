@@ -2421,8 +2421,9 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     if (opt.basis != HAIROBB_BASIS_BEZIER) {
         /* Bezier control points, 16 floats per segment, then the indices */
         float *curves = HAIROBB__CAST(float *, HAIROBB_MALLOC((16 * sizeof(float) + sizeof(uint32_t)) * segment_count, b.user));
-        uint32_t *curve_indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, curves + 16 * segment_count));
+        uint32_t *curve_indices;
         if (!curves) goto failed;
+        curve_indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, curves + 16 * segment_count));
         bvh->curves = curves;
         for (i = 0; i < segment_count; ++i) {
             size_t at = 4 * (size_t)indices[i];
@@ -2684,14 +2685,6 @@ static inline float hairobb__v4_hmax(hairobb__v4 a)
     __m128 t = _mm_max_ps(a, _mm_movehl_ps(a, a));
     return _mm_cvtss_f32(_mm_max_ss(t, _mm_shuffle_ps(t, t, 1)));
 }
-/* x, or +-tiny where |x| < tiny: keeps 1/x finite for directions parallel to a slab. */
-static inline hairobb__v4 hairobb__v4_nonzero(hairobb__v4 x, float tiny)
-{
-    __m128 sign = _mm_and_ps(x, _mm_set1_ps(-0.0f));
-    __m128 small = _mm_cmplt_ps(_mm_andnot_ps(_mm_set1_ps(-0.0f), x), _mm_set1_ps(tiny));
-    __m128 replacement = _mm_or_ps(sign, _mm_set1_ps(tiny));
-    return _mm_or_ps(_mm_and_ps(small, replacement), _mm_andnot_ps(small, x));
-}
 #if HAIROBB__SSE41
 static inline hairobb__v4 hairobb__v4_from_bytes(const signed char *q)
 {
@@ -2716,10 +2709,6 @@ static inline hairobb__v4 hairobb__v4_mul(hairobb__v4 a, hairobb__v4 b) { HAIROB
 static inline hairobb__v4 hairobb__v4_div(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] / b.f[i]); }
 static inline hairobb__v4 hairobb__v4_min(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] < b.f[i] ? a.f[i] : b.f[i]); }
 static inline hairobb__v4 hairobb__v4_max(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] > b.f[i] ? a.f[i] : b.f[i]); }
-static inline hairobb__v4 hairobb__v4_nonzero(hairobb__v4 x, float tiny)
-{
-    HAIROBB__V4_MAP(fabsf(x.f[i]) < tiny ? (signbit(x.f[i]) ? -tiny : tiny) : x.f[i]);
-}
 static inline hairobb__v4 hairobb__v4_from_bytes(const signed char *q) { HAIROBB__V4_MAP((float)q[i]); }
 #undef HAIROBB__V4_MAP
 static inline int hairobb__v4_le_bits(hairobb__v4 a, hairobb__v4 b)
@@ -2775,13 +2764,6 @@ static inline hairobb__v8 hairobb__v8_from_bytes(const signed char *q)
     return _mm256_set_m128(hairobb__v4_from_bytes(q + 4), hairobb__v4_from_bytes(q));
 }
 #endif
-static inline hairobb__v8 hairobb__v8_nonzero(hairobb__v8 x, float tiny)
-{
-    __m256 sign = _mm256_and_ps(x, _mm256_set1_ps(-0.0f));
-    __m256 small = _mm256_cmp_ps(_mm256_andnot_ps(_mm256_set1_ps(-0.0f), x), _mm256_set1_ps(tiny), _CMP_LT_OQ);
-    __m256 replacement = _mm256_or_ps(sign, _mm256_set1_ps(tiny));
-    return _mm256_or_ps(_mm256_and_ps(small, replacement), _mm256_andnot_ps(small, x));
-}
 #else
 /* Two 4-lane halves: SSE, or plain C through the 4-lane twin above. */
 typedef struct hairobb__v8 { hairobb__v4 lo, hi; } hairobb__v8;
@@ -2804,13 +2786,6 @@ static inline hairobb__v8 hairobb__v8_from_bytes(const signed char *q)
     r.hi = hairobb__v4_from_bytes(q + 4);
     return r;
 }
-static inline hairobb__v8 hairobb__v8_nonzero(hairobb__v8 x, float tiny)
-{
-    hairobb__v8 r;
-    r.lo = hairobb__v4_nonzero(x.lo, tiny);
-    r.hi = hairobb__v4_nonzero(x.hi, tiny);
-    return r;
-}
 #endif
 
 /* Node-wide vectors: one lane per child. */
@@ -2826,7 +2801,6 @@ typedef hairobb__v8 hairobb__vn;
 #define hairobb__vn_max hairobb__v8_max
 #define hairobb__vn_le_bits hairobb__v8_le_bits
 #define hairobb__vn_store hairobb__v8_store
-#define hairobb__vn_nonzero hairobb__v8_nonzero
 #define hairobb__vn_from_bytes hairobb__v8_from_bytes
 #elif HAIROBB__W == 4
 typedef hairobb__v4 hairobb__vn;
@@ -2840,7 +2814,6 @@ typedef hairobb__v4 hairobb__vn;
 #define hairobb__vn_max hairobb__v4_max
 #define hairobb__vn_le_bits hairobb__v4_le_bits
 #define hairobb__vn_store hairobb__v4_store
-#define hairobb__vn_nonzero hairobb__v4_nonzero
 #define hairobb__vn_from_bytes hairobb__v4_from_bytes
 #else
 #error "HAIROBB_NODE_WIDTH must be 4 or 8"
@@ -3631,7 +3604,6 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__v4_max hairobb__v4_max_avx2
 #define hairobb__v4_min hairobb__v4_min_avx2
 #define hairobb__v4_mul hairobb__v4_mul_avx2
-#define hairobb__v4_nonzero hairobb__v4_nonzero_avx2
 #define hairobb__v4_set1 hairobb__v4_set1_avx2
 #define hairobb__v4_store hairobb__v4_store_avx2
 #define hairobb__v4_sub hairobb__v4_sub_avx2
@@ -3644,7 +3616,6 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__v8_max hairobb__v8_max_avx2
 #define hairobb__v8_min hairobb__v8_min_avx2
 #define hairobb__v8_mul hairobb__v8_mul_avx2
-#define hairobb__v8_nonzero hairobb__v8_nonzero_avx2
 #define hairobb__v8_set1 hairobb__v8_set1_avx2
 #define hairobb__v8_store hairobb__v8_store_avx2
 #define hairobb__v8_sub hairobb__v8_sub_avx2
