@@ -133,10 +133,9 @@ static float skin_hit(const float o[3], const float d[3], float tmax)
 static void shade(const float dir[3], float out[3], long *rays, int *hit_any)
 {
     traced_ray camera = {{{R.eye[0], R.eye[1], R.eye[2]}, 0.0f, {dir[0], dir[1], dir[2]}, INFINITY}, 0, 1.0f};
-    hairobb_ray ray = camera.ray;
     hairobb_hit hit;
     int is_hair = hairobb_intersect1(R.bvh, &camera.ray, &hit), l, k;
-    float ts = skin_hit(ray.org, dir, is_hair ? hit.t : INFINITY), V[3] = {-dir[0], -dir[1], -dir[2]};
+    float ts = skin_hit(R.eye, dir, is_hair ? hit.t : INFINITY), V[3] = {-dir[0], -dir[1], -dir[2]};
     float base[3], T[3], P[3];
     ++*rays;
     if (!is_hair && ts == INFINITY) {   /* background: a dim vertical gradient */

@@ -13,7 +13,7 @@ calls=$(objdump -dr --no-show-raw-insn "$obj" | awk '
     pending && /R_X86_64_/ { t = $NF; sub(/[-+]0x[0-9a-f]+$/, "", t); print f, "<" t ">"; pending = 0; next }
     pending { print f, target; pending = 0 }
     /call/ { target = $NF; if (target ~ /\+0x[0-9a-f]+>$/) pending = 1; else print f, target }')
-kernels=$(printf '%s\n' "$calls" | awk 'NF' | wc -l)
+call_count=$(printf '%s\n' "$calls" | awk 'NF' | wc -l)
 bad=$(printf '%s\n' "$calls" | awk '$2 ~ /^<hairobb__/ && $2 !~ /_avx2>$/' | sort -u)
 avx2=$(objdump -d "$obj" | grep -c '_avx2>:$')
 if ! objdump -d "$obj" | grep -q '<hairobb__traverse_avx2>:$'; then
@@ -22,5 +22,5 @@ fi
 if [ -n "$bad" ]; then
     echo "FAIL: AVX2 kernels call baseline code:"; printf '%s\n' "$bad"; echo "0 passed, 1 failed"; exit 1
 fi
-echo "$avx2 AVX2 kernel functions in $obj, $kernels calls out of them, none into baseline code"
+echo "$avx2 AVX2 kernel functions in $obj, $call_count calls out of them, none into baseline code"
 echo "1 passed, 0 failed"

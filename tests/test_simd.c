@@ -51,18 +51,16 @@ static void compare_paths(const hair_scene *s, const hairobb_build_options *opti
     int have_avx = __builtin_cpu_supports("avx2"), k;
     hairobb_simd used = HAIROBB_SIMD_AUTO;
     size_t visits[2];
-    simd_path paths[4];
+    /* the x86-64 baseline copy has the AVX2 kernels too: AUTO picks them where the CPU has AVX2 */
+    simd_path paths[4] = {
+        {"SSE4.1", trace_sse, HAIROBB_SIMD_SSE41, HAIROBB_SIMD_SSE41, 0},
+        {"SSE2", trace_dispatch, HAIROBB_SIMD_SSE2, HAIROBB_SIMD_SSE2, 0},
+        {"AVX2 -mavx2", trace_avx, HAIROBB_SIMD_AUTO, HAIROBB_SIMD_AVX2, 1},
+        {"AVX2 dispatched", trace_dispatch, HAIROBB_SIMD_AUTO, HAIROBB_SIMD_AVX2, 0},
+    };
     hairobb_build_options asked = *options;
 
-    /* the x86-64 baseline copy has the AVX2 kernels too: AUTO picks them where the CPU has AVX2 */
-    paths[0].name = "SSE4.1"; paths[0].trace = trace_sse; paths[0].request = paths[0].expect = HAIROBB_SIMD_SSE41;
-    paths[1].name = "SSE2"; paths[1].trace = trace_dispatch; paths[1].request = paths[1].expect = HAIROBB_SIMD_SSE2;
-    paths[2].name = "AVX2 -mavx2"; paths[2].trace = trace_avx; paths[2].request = HAIROBB_SIMD_AUTO;
-    paths[2].expect = HAIROBB_SIMD_AVX2;
-    paths[3].name = "AVX2 dispatched"; paths[3].trace = trace_dispatch; paths[3].request = HAIROBB_SIMD_AUTO;
-    paths[3].expect = have_avx ? HAIROBB_SIMD_AVX2 : HAIROBB_SIMD_SSE2;
-    paths[0].needs_avx2 = paths[1].needs_avx2 = paths[3].needs_avx2 = 0;
-    paths[2].needs_avx2 = 1;
+    if (!have_avx) paths[3].expect = HAIROBB_SIMD_SSE2;
 
     scene_camera_rays(s, SIDE, SIDE, org, dir);
     for (i = 0; i < n; ++i) {

@@ -45,7 +45,7 @@ static void *tracer(void *job)
 /* A user's task system: 3 threads take the next index under a lock. */
 typedef struct task_pool {
     pthread_mutex_t lock;
-    unsigned next, count, calls;
+    unsigned next, count;
     hairobb_task_fn run;
     void *context;
 } task_pool;
@@ -57,7 +57,6 @@ static void *pool_thread(void *arg)
         unsigned index;
         pthread_mutex_lock(&pool->lock);
         index = pool->next < pool->count ? pool->next++ : pool->count;
-        if (index < pool->count) pool->calls++;
         pthread_mutex_unlock(&pool->lock);
         if (index >= pool->count) return NULL;
         pool->run(pool->context, index);
@@ -81,7 +80,7 @@ static void for_on_threads(void *user, unsigned count, hairobb_task_fn run, void
     if (started == 0) pool_thread(&pool);
     for (t = 0; t < started; ++t) pthread_join(threads[t], NULL);
     pthread_mutex_destroy(&pool.lock);
-    last_task_count = pool.calls == count ? count : 0;
+    last_task_count = count;
 }
 
 /* Every index on the calling thread, last first. */
