@@ -1,6 +1,7 @@
-# hairobb: `make test` runs every test, `make bench` the benchmark on the
-# built-in fur scene, `make examples` builds the examples.
-# the many test programs build on every core; the tests run one after another
+# hairobb: `make test` runs every test, `make check` the quick tier (a C99
+# compiler only: no Embree, clang, sanitizers or apt-get), `make bench` the
+# benchmark on the built-in fur scene, `make examples` builds the examples.
+# the test programs build on every core, and run as many at once (tests/run_all.sh)
 MAKEFLAGS += -j$(shell nproc 2>/dev/null || echo 2)
 CC       ?= cc
 # target flags: none by default, as a renderer's default build has it (the
@@ -15,11 +16,21 @@ LIBS      = -lm -pthread
 EMBREE    = -lembree3
 B         = build
 
-TESTS = $(B)/test_reference $(B)/test_unit $(B)/test_unit_w8 $(B)/test_options $(B)/test_threads $(B)/test_scenes $(B)/test_simd $(B)/test_simd_w8 $(B)/test_accuracy $(B)/test_far $(B)/test_stress $(B)/test_hair $(B)/test_secondary $(B)/test_conservative $(B)/test_bases $(B)/test_filter
+# The quick tier (`make check`): a C99 compiler and make, nothing else.
+# test_secondary is built there without its Embree comparison, and test_simd
+# (SSE4.1 and AVX2 builds) only where the compiler targets x86.
+X86    := $(filter x86_64% i386% i486% i586% i686% amd64%,$(shell $(CC) -dumpmachine 2>/dev/null))
+QUICK  = $(B)/test_options $(B)/test_conservative $(if $(X86),$(B)/test_simd $(B)/test_simd_w8) $(B)/test_unit \
+         $(B)/test_unit_w8 $(B)/test_stress $(B)/test_reference $(B)/test_hair $(B)/test_filter
+CHECK_TESTS = $(QUICK) $(B)/check_test_secondary
+# `make test`: the quick tier's programs and those needing Embree (and furBall_A)
+TESTS = $(QUICK) $(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_scenes $(B)/test_threads $(B)/test_bases
 # the same tests again under AddressSanitizer + UndefinedBehaviorSanitizer
-# (any report aborts the test), and the threads test under ThreadSanitizer
-SANITIZED = $(B)/asan_test_reference $(B)/asan_test_unit_w8 $(B)/asan_test_options $(B)/asan_test_stress $(B)/tsan_test_threads \
-            $(B)/fuzz_build_60s $(B)/fuzz_hair_30s
+# (any report aborts the test), the threads test under ThreadSanitizer, and
+# the fuzzers (clang); named first, as the longest, since the tests run two
+# at a time on 2 cores
+SANITIZED = $(B)/fuzz_build_60s $(B)/asan_test_options $(B)/fuzz_hair_30s $(B)/asan_test_unit_w8 $(B)/asan_test_stress \
+            $(B)/tsan_test_threads $(B)/asan_test_reference
 ASAN      = -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 TSAN      = -O1 -g -fsanitize=thread
 # libFuzzer targets (clang): 60 s in `make test`, `make fuzz` for a long run
@@ -27,7 +38,7 @@ FUZZCC    = clang
 FUZZ      = -std=c99 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -ffp-contract=off -I.
 FUZZ_SECONDS ?= 1800
 
-.PHONY: all test deps compile-matrix bench examples clean fuzz
+.PHONY: all test check deps compile-matrix bench examples clean fuzz
 all: $(TESTS) $(SANITIZED) $(B)/bench examples
 
 deps:
@@ -41,29 +52,29 @@ $(B)/test_reference: tests/test_reference.c tests/reference.h | $(B)
 
 # white-box tests on 4-wide and on 8-wide nodes
 # (their counting allocators lock a pthread mutex: builds allocate on several threads)
-$(B)/test_unit: tests/test_unit.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
+$(B)/test_unit: tests/test_unit.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=4 $< -o $@ $(LIBS) -lpthread
 
-$(B)/test_unit_w8: tests/test_unit.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
+$(B)/test_unit_w8: tests/test_unit.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=8 $< -o $@ $(LIBS) -lpthread
 
 # black-box: every combination of build options against the reference
-$(B)/test_options: tests/test_options.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
+$(B)/test_options: tests/test_options.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS) -lpthread
 
 # threads: builds on 1 and 4 threads equal, 4 threads tracing one BVH
-$(B)/test_threads: tests/test_threads.c hairobb.h tests/scenes.h tests/check.h | $(B)
+$(B)/test_threads: tests/test_threads.c hairobb.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
 
 $(B)/asan_test_reference: tests/test_reference.c tests/reference.h | $(B)
 	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
-$(B)/asan_test_unit_w8: tests/test_unit.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
+$(B)/asan_test_unit_w8: tests/test_unit.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) -DHAIROBB_NODE_WIDTH=8 $< -o $@ $(LIBS)
-$(B)/asan_test_options: tests/test_options.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
+$(B)/asan_test_options: tests/test_options.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) -DCROSSED_RAYS=1024 $< -o $@ $(LIBS)
-$(B)/asan_test_stress: tests/test_stress.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
+$(B)/asan_test_stress: tests/test_stress.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
-$(B)/tsan_test_threads: tests/test_threads.c hairobb.h tests/scenes.h tests/check.h | $(B)
+$(B)/tsan_test_threads: tests/test_threads.c hairobb.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(WARN) $(TSAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
 
 $(B)/fuzz_%: tests/fuzz_%.c tests/fuzz_checks.h hairobb.h | $(B) deps
@@ -77,7 +88,7 @@ fuzz: $(B)/fuzz_build $(B)/fuzz_hair
 	sh tests/fuzz_run.sh $(B)/fuzz_build tests/fuzz_corpus/bvh_build $(FUZZ_SECONDS)
 	sh tests/fuzz_run.sh $(B)/fuzz_hair tests/fuzz_corpus/hair_read $(FUZZ_SECONDS)
 
-$(B)/test_scenes: tests/test_scenes.c tests/scenes.h tests/embree_wrap.h | $(B) deps
+$(B)/test_scenes: tests/test_scenes.c tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
 
 # the same tracing code compiled four ways (plain C, SSE4.1, AVX2, and the
@@ -92,42 +103,44 @@ simd_width = $(subst w,,$(word 2,$(subst _, ,$*)))
 .PRECIOUS: $(B)/simd_%.o
 $(B)/simd_%.o: tests/simd_variant.c tests/simd_variant.h hairobb.h | $(B)
 	$(CC) $(BASE) $(SIMD_FLAGS_$(simd_path)) -DHAIROBB_NODE_WIDTH=$(simd_width) -DVARIANT=trace_$(simd_path) -c $< -o $@
-$(B)/test_simd: tests/test_simd.c $(B)/simd_plain_w4.o $(B)/simd_sse_w4.o $(B)/simd_avx_w4.o $(B)/simd_dispatch_w4.o tests/scenes.h | $(B)
+$(B)/test_simd: tests/test_simd.c $(B)/simd_plain_w4.o $(B)/simd_sse_w4.o $(B)/simd_avx_w4.o $(B)/simd_dispatch_w4.o tests/scenes.h tests/test_data.h | $(B)
 	$(CC) $(BASE) $(ARCH) $(filter %.c %.o,$^) -o $@ $(LIBS)
-$(B)/test_simd_w8: tests/test_simd.c $(B)/simd_plain_w8.o $(B)/simd_sse_w8.o $(B)/simd_avx_w8.o $(B)/simd_dispatch_w8.o tests/scenes.h | $(B)
+$(B)/test_simd_w8: tests/test_simd.c $(B)/simd_plain_w8.o $(B)/simd_sse_w8.o $(B)/simd_avx_w8.o $(B)/simd_dispatch_w8.o tests/scenes.h tests/test_data.h | $(B)
 	$(CC) $(BASE) $(ARCH) $(filter %.c %.o,$^) -o $@ $(LIBS)
 
-$(B)/test_accuracy: tests/test_accuracy.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps
+$(B)/test_accuracy: tests/test_accuracy.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
 
-$(B)/test_far: tests/test_far.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps
+$(B)/test_far: tests/test_far.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
 
 # numerical stress: radii, degenerate segments, hard rays, joints
-$(B)/test_stress: tests/test_stress.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
+$(B)/test_stress: tests/test_stress.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
 
 # traversal conservativeness: an instrumented header records the leaves reached
-$(B)/test_conservative: tests/test_conservative.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
+$(B)/test_conservative: tests/test_conservative.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
 
 # curve bases against Embree's flat curves of each basis and the reference
-$(B)/test_bases: tests/test_bases.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps
+$(B)/test_bases: tests/test_bases.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
 
 # the any-hit filter against the reference
-$(B)/test_filter: tests/test_filter.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
+$(B)/test_filter: tests/test_filter.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
 
 # secondary rays leaving a hit: the self-intersection rule, contact shadows
-$(B)/test_secondary: tests/test_secondary.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps
+$(B)/test_secondary: tests/test_secondary.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
+$(B)/check_test_secondary: tests/test_secondary.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
+	$(CC) $(BASE) $(ARCH) -DTESTS_NO_EMBREE $< -o $@ $(LIBS)
 
 # the .hair reader against the tests' own, bad files, a BVH from a loaded file
-$(B)/test_hair: tests/test_hair.c hairobb.h tests/reference.h tests/scenes.h tests/check.h | $(B)
+$(B)/test_hair: tests/test_hair.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
 
-$(B)/bench: bench/bench.c hairobb.h tests/reference.h tests/scenes.h tests/embree_wrap.h | $(B) deps
+$(B)/bench: bench/bench.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) -DBENCH_CFLAGS='"$(BASE) $(ARCH)"' $< -o $@ $(EMBREE) -lpthread $(LIBS)
 
 # The header must compile clean as users compile it: gcc and clang, C99 and
@@ -151,7 +164,10 @@ $(B)/check_dispatch_calls: tests/check_dispatch_calls.sh $(B)/simd_dispatch_w8.o
 	@printf '#!/bin/sh\nexec sh tests/check_dispatch_calls.sh $(B)/simd_dispatch_w8.o\n' > $@ && chmod +x $@
 
 test: deps $(TESTS) $(SANITIZED) compile-matrix examples $(B)/run_examples $(B)/check_dispatch_calls
-	@sh tests/run_all.sh $(TESTS) $(SANITIZED) $(B)/run_examples $(B)/check_dispatch_calls
+	@sh tests/run_all.sh $(SANITIZED) $(TESTS) $(B)/run_examples $(B)/check_dispatch_calls
+
+check: $(CHECK_TESTS)
+	@$(if $(X86),,echo "test_simd left out: $(CC) does not target x86";) sh tests/run_all.sh $(CHECK_TESTS)
 
 bench: $(B)/bench
 	$(B)/bench

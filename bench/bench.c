@@ -42,12 +42,11 @@ enum {
     MAX_THREAD_COUNTS = 8,
     RAY_BLOCK = 64,            /* rays per work item; blocks interleave across threads */
     DEFAULT_SEGMENTS = 200000,
-    DEFAULT_RESOLUTION = 1024,
+    DEFAULT_RESOLUTION = 768, /* make bench within 2 minutes on 2 cores */
     DEFAULT_PASSES = 3,
     DEFAULT_ACCURACY_RAYS = 16384
 };
 
-#define DEFAULT_STRAIGHT_PATH "../shared/data/straight.hair"
 #define DEFAULT_TSV_PATH "build/bench.tsv"
 #define DEFAULT_PNG_PATH "build/bench_error.png"
 #define DEFAULT_PLOT_SCRIPT "bench/plot.gp"
@@ -421,10 +420,14 @@ static double measure_mrays(const tracer *t, const ray_set *rays, hit_record *hi
 /* Scenes and ray sets                                                      */
 /* ======================================================================== */
 
-/* Returns 0 on success, -1 when a file-based scene is absent (skipped), 1 on
-   errors, 2 for an unknown name (reported here). */
-static int load_scene(const options *o, const char *name, hair_scene *s)
+/* Returns 0 on success, -1 when a file-based scene is absent (skipped; why
+   says what is missing and where to get it), 1 on errors, 2 for an unknown
+   name or a data path that cannot be read (reported here). */
+static int load_scene(const options *o, const char *name, hair_scene *s, char why[TEST_DATA_WHY_SIZE])
 {
+    const char *path = NULL;
+    test_data_status found = TEST_DATA_FOUND;
+    snprintf(why, TEST_DATA_WHY_SIZE, "%s: file not found", name);
     if (strcmp(name, "combed") == 0)
         return scene_combed(s, o->segments, 1);
     if (strcmp(name, "curly") == 0)
@@ -433,10 +436,19 @@ static int load_scene(const options *o, const char *name, hair_scene *s)
         return scene_random(s, o->segments, 3);
     if (strcmp(name, "crossing") == 0)
         return scene_crossing(s, o->segments, 4);
-    if (strcmp(name, "straight") == 0)
-        return scene_load_hair(s, o->straight_path);
-    if (strcmp(name, "furball") == 0)
-        return scene_load_furball(s, o->furball_path);
+    if (strcmp(name, "straight") == 0 || strcmp(name, "furball") == 0) {
+        int straight = name[0] == 's';
+        path = straight ? o->straight_path : o->furball_path; /* given on the command line */
+        if (!path)
+            found = straight ? test_data_straight_hair(&path, why) : test_data_furball(&path, why);
+        if (found == TEST_DATA_BAD_PATH || (found == TEST_DATA_ABSENT && test_data_required())) {
+            fprintf(stderr, "bench: %s%s\n", why, found == TEST_DATA_ABSENT ? " (HAIROBB_REQUIRE_DATA is set)" : "");
+            return 2;
+        }
+        if (found == TEST_DATA_ABSENT)
+            return -1;
+        return straight ? scene_load_hair(s, path) : scene_load_furball(s, path);
+    }
     if (!strchr(name, '/') && !strchr(name, '.')) {
         fprintf(stderr, "bench: unknown scene '%s' (see --help; a file needs a path or the .hair extension)\n", name);
         return 2;
@@ -1307,6 +1319,13 @@ static void print_machine(const options *o)
         printf("load average before the run: %.2f %.2f %.2f (1, 5, 15 min)\n", load[0], load[1], load[2]);
     if (f)
         fclose(f);
+    /* the file scenes, for --scene straight,furball: found, or what to get */
+    const char *path;
+    char why[TEST_DATA_WHY_SIZE];
+    if (o->straight_path || test_data_straight_hair(&path, why) == TEST_DATA_FOUND)
+        printf("data: straight.hair at %s (--scene straight)\n", o->straight_path ? o->straight_path : path);
+    else
+        printf("data: --scene straight would be skipped: %s\n", why);
 }
 
 /* ======================================================================== */
@@ -1336,12 +1355,13 @@ static void print_help(void)
            "  --tsv FILE          every figure, one row per scene and variant (default %s)\n"
            "  --png FILE          run time against error chart, drawn by gnuplot if present (default %s)\n"
            "  --plot-script FILE  gnuplot script (default %s)\n"
-           "  --straight-path P   file of the 'straight' scene (default %s)\n"
+           "  --straight-path P   file of the 'straight' scene (default $" TEST_DATA_STRAIGHT_HAIR_VARIABLE ",\n"
+           "                      else %s; skipped if absent)\n"
            "  --furball-path P    furBall_A.bin.gz (default %s)\n"
            "  --quiet             no progress on stderr (shown only when stderr is a terminal)\n"
            "  --help              this text\n",
            DEFAULT_SEGMENTS, DEFAULT_RESOLUTION, DEFAULT_PASSES, DEFAULT_ACCURACY_RAYS, DEFAULT_TSV_PATH,
-           DEFAULT_PNG_PATH, DEFAULT_PLOT_SCRIPT, DEFAULT_STRAIGHT_PATH, SCENE_FURBALL_DEFAULT_PATH);
+           DEFAULT_PNG_PATH, DEFAULT_PLOT_SCRIPT, TEST_DATA_STRAIGHT_HAIR_DEFAULT, SCENE_FURBALL_DEFAULT_PATH);
 }
 
 /* Parses a count with an optional k or M suffix; 0 on success. */
@@ -1427,8 +1447,8 @@ static void default_options(options *o)
     o->tsv_path = DEFAULT_TSV_PATH;
     o->png_path = DEFAULT_PNG_PATH;
     o->plot_script = DEFAULT_PLOT_SCRIPT;
-    o->straight_path = getenv("HAIROBB_STRAIGHT_HAIR") ? getenv("HAIROBB_STRAIGHT_HAIR") : DEFAULT_STRAIGHT_PATH;
-    o->furball_path = NULL; /* scenes.h's default */
+    o->straight_path = NULL; /* tests/test_data.h's rule */
+    o->furball_path = NULL;
 }
 
 /* Returns 0 to run, 1 on a usage error, 2 after --help. */
@@ -1514,9 +1534,10 @@ static int run_scene(const options *o, const char *name, const int selected[VARI
     snprintf(sr->name, sizeof sr->name, "%s", name);
     progress("%s: loading", name);
     double start = scene_now();
-    int loaded = load_scene(o, name, &w.scene);
+    char why[TEST_DATA_WHY_SIZE];
+    int loaded = load_scene(o, name, &w.scene, why);
     if (loaded == -1) {
-        printf("\n=== scene %s: file not found, skipped\n", name);
+        printf("\n=== scene %s skipped: %s\n", name, why);
         return 0;
     }
     if (loaded != 0) {

@@ -1,11 +1,14 @@
-/* check.h - the tests' tiny harness: CHECK prints failures, check_summary
-   prints the closing line "N passed, M failed" and gives the exit code. */
+/* check.h - the tests' tiny harness: CHECK prints failures, check_skip a
+   case that could not run, check_summary prints the closing line
+   "N passed, M failed, K skipped" and gives the exit code. */
 #ifndef HAIROBB_TESTS_CHECK_H
 #define HAIROBB_TESTS_CHECK_H
 
 #include <stdio.h>
 
-static int check_passed, check_failed;
+#include "test_data.h"
+
+static int check_passed, check_failed, check_skipped;
 
 #define CHECK(cond, ...)                                                  \
     do {                                                                  \
@@ -19,9 +22,46 @@ static int check_passed, check_failed;
         }                                                                 \
     } while (0)
 
-static int check_summary(void)
+static inline void check_skip(const char *why)
 {
-    printf("%d passed, %d failed\n", check_passed, check_failed);
+    ++check_skipped;
+    printf("SKIP %s\n", why);
+}
+
+/* The path of a data file the next cases need, or NULL after reporting it:
+   a skip, or a failure where it must be there (HAIROBB_REQUIRE_DATA=1, or
+   HAIROBB_STRAIGHT_HAIR naming a file that is not). */
+static inline const char *check_data(test_data_status status, const char *path, const char *why)
+{
+    if (status == TEST_DATA_FOUND) return path;
+    if (status == TEST_DATA_ABSENT && !test_data_required()) {
+        check_skip(why);
+    } else {
+        ++check_failed;
+        printf("FAIL %s%s\n", why, status == TEST_DATA_ABSENT ? " (HAIROBB_REQUIRE_DATA is set)" : "");
+    }
+    return NULL;
+}
+
+static inline const char *check_straight_hair(void)
+{
+    const char *path;
+    char why[TEST_DATA_WHY_SIZE];
+    test_data_status status = test_data_straight_hair(&path, why);
+    return check_data(status, path, why);
+}
+
+static inline const char *check_furball(void)
+{
+    const char *path;
+    char why[TEST_DATA_WHY_SIZE];
+    test_data_status status = test_data_furball(&path, why);
+    return check_data(status, path, why);
+}
+
+static inline int check_summary(void)
+{
+    printf("%d passed, %d failed, %d skipped\n", check_passed, check_failed, check_skipped);
     return check_failed ? 1 : 0;
 }
 

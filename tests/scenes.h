@@ -39,6 +39,8 @@
 #include <string.h>
 #include <time.h>
 
+#include "test_data.h" /* where furBall_A is installed */
+
 typedef struct hair_scene {
     float *vertices;        /* 16-byte aligned float4 (x, y, z, radius) */
     size_t vertex_count;
@@ -700,7 +702,7 @@ static inline int scene_load_hair(hair_scene *s, const char *path)
 /* Embree's furBall_A model as Debian ships it in embree-tools (see
    furBall_A.xml): after gunzip, uint32 segment start indices at byte 0 and
    float4 vertices right after them; segments are linear, vertex i to i+1. */
-#define SCENE_FURBALL_DEFAULT_PATH "/usr/share/doc/embree3/models/furBall_A.bin.gz"
+#define SCENE_FURBALL_DEFAULT_PATH TEST_DATA_FURBALL_PATH
 enum {
     SCENE_FURBALL_SEGMENTS = 455505,
     SCENE_FURBALL_VERTICES = 485872,

@@ -135,9 +135,8 @@ static void check_scene(hair_scene *s)
 int main(void)
 {
     hair_scene s;
-    const char *hair_path = getenv("HAIROBB_STRAIGHT_HAIR");
+    const char *path;
     int r;
-    if (!hair_path) hair_path = "../shared/data/straight.hair";
 
     if (scene_combed(&s, 100000, 1) == 0) { check_scene(&s); scene_free(&s); }
     else CHECK(0, "combed scene");
@@ -145,11 +144,15 @@ int main(void)
     else CHECK(0, "curly scene");
     if (scene_random(&s, 100000, 3) == 0) { check_scene(&s); scene_free(&s); }
     else CHECK(0, "random scene");
-    r = scene_load_hair(&s, hair_path);
-    CHECK(r == 0, "load %s (set HAIROBB_STRAIGHT_HAIR to its path)", hair_path);
-    if (r == 0) { check_scene(&s); scene_free(&s); }
-    r = scene_load_furball(&s, NULL);
-    CHECK(r == 0, "load furBall_A (install embree-tools)");
-    if (r == 0) { check_scene(&s); scene_free(&s); }
+    if ((path = check_straight_hair()) != NULL) {
+        r = scene_load_hair(&s, path);
+        CHECK(r == 0, "load %s", path);
+        if (r == 0) { check_scene(&s); scene_free(&s); }
+    }
+    if ((path = check_furball()) != NULL) {
+        r = scene_load_furball(&s, path);
+        CHECK(r == 0, "load %s", path);
+        if (r == 0) { check_scene(&s); scene_free(&s); }
+    }
     return check_summary();
 }

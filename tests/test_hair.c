@@ -4,7 +4,7 @@
    file's arrays as written, and an error (never a crash, a leak or a huge
    allocation) for every truncated, oversized or lying file. Then a BVH
    built from a loaded file traces what the reference traces.
-   usage: test_hair [path/to/straight.hair] */
+   straight.hair is found by tests/test_data.h's rule. */
 #define _POSIX_C_SOURCE 200809L
 #include <stdio.h>
 #include <stdlib.h>
@@ -400,10 +400,9 @@ static void test_straight_hair(const char *path)
     ref_scene *reference;
     float *org, *dir;
     hairobb_result r;
-    if (!path || scene_read_file(path, &data, &size) != 0) {
-        printf("SKIP straight.hair: not found (pass its path as the first argument)\n");
-        return;
-    }
+    if (!path) return;
+    CHECK(scene_read_file(path, &data, &size) == 0, "read %s", path);
+    if (!data) return;
     r = hairobb_hair_load(path, NULL, &h);
     CHECK(r == HAIROBB_OK && h.strand_count == 10000 && h.point_count == 160000 && h.segment_count == 150000 &&
           h.vertex_count == 10000 * 46 && h.colors && !h.transparency && h.points[3] == 0.05f,
@@ -440,15 +439,14 @@ static void test_straight_hair(const char *path)
     free(data);
 }
 
-int main(int argc, char **argv)
+int main(void)
 {
-    const char *straight = argc > 1 ? argv[1] : "../shared/data/straight.hair";
     test_layouts();
     test_single_point_strands();
     test_truncated_and_oversized();
     test_lying_headers();
     test_allocation_failure();
     test_files();
-    test_straight_hair(access(straight, R_OK) == 0 ? straight : NULL);
+    test_straight_hair(check_straight_hair());
     return check_summary();
 }

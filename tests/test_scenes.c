@@ -2,11 +2,11 @@
  * tests/embree_wrap.h) before it is trusted to judge hairobb.
  *
  *   gcc -std=c99 -O2 -Wall -Wextra -pedantic tests/test_scenes.c -o /tmp/test_scenes -lembree3 -lm
- *   /tmp/test_scenes [path/to/straight.hair]
+ *   /tmp/test_scenes     (straight.hair found by tests/test_data.h's rule)
  *
  * Prints PASS/FAIL per check, SKIP for data that is absent, indented info
  * lines (counts, bounds, Embree build cost, camera hit fractions), and last
- * "N passed, M failed"; exits nonzero on any failure. Also valid C++.
+ * "N passed, M failed, K skipped"; exits nonzero on any failure. Also valid C++.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -17,10 +17,9 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "check.h"
 #include "embree_wrap.h"
 #include "scenes.h"
-
-static int passed_count, failed_count;
 
 #if defined(__GNUC__) || defined(__clang__)
 #define TEST_PRINTF_LIKE(format_index) __attribute__((format(printf, format_index, format_index + 1)))
@@ -40,9 +39,9 @@ static void check(int ok, const char *format, ...)
     printf("\n");
     va_end(args);
     if (ok)
-        passed_count++;
+        check_passed++;
     else
-        failed_count++;
+        check_failed++;
 }
 
 static void info(const char *format, ...)
@@ -53,14 +52,6 @@ static void info(const char *format, ...)
     vprintf(format, args);
     printf("\n");
     va_end(args);
-}
-
-static int file_exists(const char *path)
-{
-    FILE *file = fopen(path, "rb");
-    if (file)
-        fclose(file);
-    return file != NULL;
 }
 
 /* All control points finite and radii non-negative; reports the radius range. */
@@ -268,10 +259,8 @@ static void test_hair_format(void)
 
 static void test_straight_hair(const char *path)
 {
-    if (!path) {
-        printf("SKIP straight.hair: not found (pass its path as the first argument)\n");
+    if (!path)
         return;
-    }
     hair_scene s;
     double start = scene_now();
     int result = scene_load_hair(&s, path);
@@ -328,16 +317,14 @@ static void test_straight_hair(const char *path)
     free(data);
 }
 
-static void test_furball(void)
+static void test_furball(const char *path)
 {
+    if (!path)
+        return;
     hair_scene s;
     double start = scene_now();
-    int result = scene_load_furball(&s, NULL);
+    int result = scene_load_furball(&s, path);
     double seconds = scene_now() - start;
-    if (result == -1) {
-        printf("SKIP furBall_A: %s not installed (embree-tools)\n", SCENE_FURBALL_DEFAULT_PATH);
-        return;
-    }
     check(result == 0 && s.segment_count == 455505, "furBall_A: loads with 455505 segments (got %zu)",
           s.segment_count);
     if (result != 0)
@@ -515,7 +502,7 @@ static void test_embree_options(void)
     scene_free(&s);
 }
 
-static void test_embree(const char *straight_path)
+static void test_embree(const char *straight_path, const char *furball_path)
 {
     test_embree_options();
     scene_generator generators[] = {scene_combed, scene_curly, scene_random, scene_crossing};
@@ -531,33 +518,24 @@ static void test_embree(const char *straight_path)
         test_embree_scene(&s, 0);
         scene_free(&s);
     }
-    if (scene_load_furball(&s, NULL) == 0) {
+    if (furball_path && scene_load_furball(&s, furball_path) == 0) {
         test_embree_scene(&s, 0);
         scene_free(&s);
     }
 }
 
-int main(int argc, char **argv)
+int main(void)
 {
-    /* an explicit path is the only one tried; else the usual places */
-    const char *candidates[] = {"shared/data/straight.hair", "../shared/data/straight.hair",
-                                "/work/shared/data/straight.hair"};
-    const char *straight_path = NULL;
-    if (argc > 1)
-        straight_path = file_exists(argv[1]) ? argv[1] : NULL;
-    else
-        for (size_t k = 0; k < sizeof candidates / sizeof candidates[0] && !straight_path; k++)
-            if (file_exists(candidates[k]))
-                straight_path = candidates[k];
+    /* the data files, found by tests/test_data.h's rule (each reported once) */
+    const char *straight_path = check_straight_hair();
+    const char *furball_path = check_furball();
 
     test_catmull_rom();
     test_generators();
     test_hair_format();
     test_straight_hair(straight_path);
-    test_furball();
+    test_furball(furball_path);
     test_camera();
-    test_embree(straight_path);
-
-    printf("%d passed, %d failed\n", passed_count, failed_count);
-    return failed_count ? 1 : 0;
+    test_embree(straight_path, furball_path);
+    return check_summary();
 }
