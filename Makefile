@@ -38,7 +38,7 @@ FUZZCC    = clang
 FUZZ      = -std=c99 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -ffp-contract=off -I.
 FUZZ_SECONDS ?= 1800
 
-.PHONY: all test check deps compile-matrix bench examples clean fuzz
+.PHONY: all test check deps compile-matrix bench profile examples clean fuzz
 all: $(TESTS) $(SANITIZED) $(B)/bench examples
 
 deps:
@@ -171,6 +171,13 @@ check: $(CHECK_TESTS)
 
 bench: $(B)/bench
 	$(B)/bench
+
+# instructions per ray under callgrind, hairobb against Embree, split by
+# where they go (bench/profile.sh; PROFILE="..." adds bench options)
+$(B)/bench_counted: bench/bench.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
+	$(CC) $(BASE) $(ARCH) -DBENCH_COUNTS $< -o $@ $(EMBREE) -lpthread $(LIBS)
+profile: $(B)/bench $(B)/bench_counted
+	sh bench/profile.sh $(PROFILE)
 
 examples: $(B)/minimal $(B)/render $(B)/embree_swap
 

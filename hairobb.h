@@ -2630,6 +2630,14 @@ typedef struct hairobb__ray_poly {
 #define HAIROBB__LEAF_VISIT(rs, prim) 0
 #endif
 
+/* Instrumented builds (the bench's profile, bench/profile.sh) count the
+   traversal's work per ray: node (a node's children tested), leaf,
+   segment (a segment's first, conservative test) and segment_passed (the
+   segments that pass it and go on to the exact test). */
+#ifndef HAIROBB__COUNT
+#define HAIROBB__COUNT(what) ((void)0)
+#endif
+
 /* A ray leaving the hit `from` (NULL: none): the band it skips is twice the
    segment's largest radius, the ribbon's reach whichever way it faces the
    new ray, plus 8 float ulps of the origin for the rounding of the hit
@@ -2972,6 +2980,7 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
             const uint64_t *child;
             float dist[HAIROBB__W];
             int bits, i;
+            HAIROBB__COUNT(node);
             if (type == HAIROBB__REF_QOBB_PER_CHILD) {      /* the default layout's types first */
                 bits = hairobb__intersect_compressed_obb_node(HAIROBB__CAST(const hairobb__compressed_obb_node *, node), rs, dist);
                 child = HAIROBB__CAST(const hairobb__compressed_obb_node *, node)->child;
@@ -3025,6 +3034,7 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
                 continue;
             }
         } else if (type == HAIROBB__REF_LEAF) {
+            HAIROBB__COUNT(leaf);
             if (hairobb__intersect_leaf(bvh, rs, ref, any_hit)) {
                 found = 1;
                 if (any_hit) return 1;
@@ -3379,6 +3389,7 @@ static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state
     hairobb__v4 x, y, z, r, reach, neg_reach;
     float max_r, magnitude;
     int inside;
+    HAIROBB__COUNT(segment);
     hairobb__to_ray_space_v4(rs, bvh->vertices + 4 * (size_t)bvh->indices[prim], &c, &x, &y, &z, &r);
     max_r = hairobb__v4_hmax(r);
     reach = hairobb__v4_set1(max_r);
@@ -3403,6 +3414,7 @@ static int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state
         inside &= (hairobb__v4_le_bits(d, hairobb__v4_set1(limit)) + 15) & (hairobb__v4_le_bits(hairobb__v4_set1(-limit), d) + 15);
         if (!inside) return 0;   /* both tests, one branch */
     }
+    HAIROBB__COUNT(segment_passed);
     return hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit);
 }
 

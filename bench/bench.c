@@ -12,9 +12,36 @@
 
    Fairness rules: every tracer runs through the same timing harness (one
    function pointer call per ray, same thread layout, same ray buffers);
-   secondary rays are spawned once per scene and shared by all variants. */
+   secondary rays are spawned once per scene and shared by all variants.
+
+   Drift: this runs on shared machines, whose speed drifts by more than the
+   differences measured. So every variant is built first, then each ray set
+   and thread count is timed in rounds: one pass of every variant per round,
+   Embree included, after one warm-up pass each. A figure is the median over
+   the rounds, with its min-max spread; a ratio to Embree is taken within
+   each round (the variants of one round run seconds apart), then its
+   median and spread. */
 #define _POSIX_C_SOURCE 200809L
 #define HAIROBB_IMPLEMENTATION
+
+/* --profile (bench/profile.sh): built with -DBENCH_COUNTS, the header counts
+   each ray's nodes, leaves and segments; run under callgrind, each variant's
+   pass over each ray set is dumped on its own. */
+#ifdef BENCH_COUNTS
+static struct { unsigned long long node, leaf, segment, segment_passed; } bench_count;
+#define HAIROBB__COUNT(what) (++bench_count.what)
+#endif
+#if defined(__has_include)
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#endif
+#endif
+#ifndef CALLGRIND_TOGGLE_COLLECT /* no valgrind headers: --profile still counts */
+#define CALLGRIND_TOGGLE_COLLECT
+#define CALLGRIND_ZERO_STATS
+#define CALLGRIND_DUMP_STATS_AT(name) ((void)(name))
+#endif
+
 #include "hairobb.h"
 #include "tests/embree_wrap.h"
 #include "tests/reference.h"
@@ -43,7 +70,8 @@ enum {
     RAY_BLOCK = 64,            /* rays per work item; blocks interleave across threads */
     DEFAULT_SEGMENTS = 200000,
     DEFAULT_RESOLUTION = 768, /* make bench within 2 minutes on 2 cores */
-    DEFAULT_PASSES = 3,
+    MAX_ROUNDS = 64,
+    DEFAULT_ROUNDS = 3,
     DEFAULT_ACCURACY_RAYS = 16384
 };
 
@@ -63,11 +91,12 @@ typedef struct options {
     unsigned thread_counts[MAX_THREAD_COUNTS];
     int thread_count_count;
     const char *variant_list;
-    int passes;
+    int rounds;
     size_t accuracy_rays;
     const char *tsv_path, *png_path, *plot_script;
     const char *straight_path, *furball_path;
     int quiet;
+    int profile;
 } options;
 
 static int show_progress; /* stderr is a terminal and --quiet was not given */
@@ -398,22 +427,21 @@ static int compare_doubles(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-/* One warm-up pass (caches, page faults, Embree's lazy setup), then the
-   median of `passes` timed passes, in millions of rays per second. */
-static double measure_mrays(const tracer *t, const ray_set *rays, hit_record *hits, unsigned thread_count,
-                            int passes)
+/* Median, min and max of n values (sorted in place); NaN for none. */
+typedef struct spread {
+    double median, min, max;
+} spread;
+
+static spread spread_of(double *values, int n)
 {
-    double seconds[64];
-    if (rays->count == 0)
-        return NAN;
-    if (passes > 64)
-        passes = 64;
-    trace_pass(t, rays, hits, thread_count);
-    for (int p = 0; p < passes; p++)
-        seconds[p] = trace_pass(t, rays, hits, thread_count);
-    qsort(seconds, (size_t)passes, sizeof seconds[0], compare_doubles);
-    double median = passes % 2 ? seconds[passes / 2] : 0.5 * (seconds[passes / 2 - 1] + seconds[passes / 2]);
-    return (double)rays->count / median * 1e-6;
+    spread out = {NAN, NAN, NAN};
+    if (n <= 0)
+        return out;
+    qsort(values, (size_t)n, sizeof values[0], compare_doubles);
+    out.median = n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+    out.min = values[0];
+    out.max = values[n - 1];
+    return out;
 }
 
 /* ======================================================================== */
@@ -699,7 +727,10 @@ typedef struct variant_result {
     double build_seconds;
     size_t memory_bytes;
     hairobb_stats stats;   /* hairobb only */
-    double mrays[RAY_KIND_COUNT][MAX_THREAD_COUNTS]; /* NAN when not measured */
+    /* Mrays/s over the rounds, and the ratio to Embree flat r4 taken within
+       each round; NAN when not measured */
+    spread mrays[RAY_KIND_COUNT][MAX_THREAD_COUNTS];
+    spread ratio[RAY_KIND_COUNT][MAX_THREAD_COUNTS];
     int has_accuracy;
     accuracy_summary accuracy;
 } variant_result;
@@ -821,35 +852,59 @@ static void free_variant(built_accel *b)
     memset(b, 0, sizeof *b);
 }
 
-static void run_variant(const options *o, workload *w, const variant *v, variant_result *r)
+/* Builds a variant and records its build time, memory and tree; 1 if the
+   build failed. */
+static int build_for_rounds(workload *w, const variant *v, built_accel *accel, variant_result *r)
 {
-    built_accel accel;
     for (int k = 0; k < RAY_KIND_COUNT; k++)
         for (int t = 0; t < MAX_THREAD_COUNTS; t++)
-            r->mrays[k][t] = NAN;
+            r->mrays[k][t] = r->ratio[k][t] = (spread){NAN, NAN, NAN};
     progress_start("  %s: build", v->label);
-    if (build_variant(w, v, &accel, r) != 0) {
+    if (build_variant(w, v, accel, r) != 0) {
         progress("failed");
-        return;
+        return 1;
     }
     progress("%.2f s", r->build_seconds);
     r->measured = 1;
+    return 0;
+}
+
+/* Times every built variant on each ray set and thread count, in rounds
+   (see the top of the file); fills mrays and ratio. */
+static void time_in_rounds(const options *o, workload *w, built_accel accel[VARIANT_COUNT], scene_result *sr)
+{
+    static double mrays[VARIANT_COUNT][MAX_ROUNDS];
+    int base = variant_index(BASELINE_KEY);
     for (int k = 0; k < RAY_KIND_COUNT; k++) {
-        if (!o->ray_kind_enabled[k] || w->rays[k].count == 0)
+        const ray_set *rays = &w->rays[k];
+        if (!o->ray_kind_enabled[k] || rays->count == 0)
             continue;
         for (int t = 0; t < o->thread_count_count; t++) {
-            progress_start("  %s: %s rays, %u thread%s", v->label, ray_kind_names[k], o->thread_counts[t],
-                           o->thread_counts[t] == 1 ? "" : "s");
-            r->mrays[k][t] = measure_mrays(&accel.tracer, &w->rays[k], w->hits, o->thread_counts[t], o->passes);
-            progress("%.2f Mrays/s", r->mrays[k][t]);
+            unsigned threads = o->thread_counts[t];
+            progress_start("  %s rays, %u thread%s: warm-up", ray_kind_names[k], threads, threads == 1 ? "" : "s");
+            for (int i = 0; i < VARIANT_COUNT; i++) /* caches, page faults, Embree's lazy set-up */
+                if (sr->variants[i].measured)
+                    trace_pass(&accel[i].tracer, rays, w->hits, threads);
+            for (int round = 0; round < o->rounds; round++) {
+                progress_start("  %s rays, %u thread%s: round %d of %d", ray_kind_names[k], threads,
+                               threads == 1 ? "" : "s", round + 1, o->rounds);
+                for (int i = 0; i < VARIANT_COUNT; i++)
+                    if (sr->variants[i].measured)
+                        mrays[i][round] = (double)rays->count / trace_pass(&accel[i].tracer, rays, w->hits, threads) * 1e-6;
+            }
+            progress("done");
+            for (int i = 0; i < VARIANT_COUNT; i++) {
+                variant_result *r = &sr->variants[i];
+                double ratios[MAX_ROUNDS];
+                if (!r->measured)
+                    continue;
+                for (int round = 0; round < o->rounds; round++)
+                    ratios[round] = sr->variants[base].measured ? mrays[i][round] / mrays[base][round] : NAN;
+                r->ratio[k][t] = spread_of(ratios, sr->variants[base].measured ? o->rounds : 0);
+                r->mrays[k][t] = spread_of(mrays[i], o->rounds);
+            }
         }
     }
-    if (w->has_accuracy) {
-        progress_start("  %s: accuracy", v->label);
-        r->has_accuracy = accuracy_measure(&accel.tracer, &w->accuracy, &r->accuracy) == 0;
-        progress("%s", r->has_accuracy ? "done" : "out of memory");
-    }
-    free_variant(&accel);
 }
 
 /* ======================================================================== */
@@ -1004,27 +1059,41 @@ static void print_build_table(const scene_result *sr, const int selected[VARIANT
     }
 }
 
+/* Two tables: Mrays/s, then the ratio to Embree flat r4, each as the
+   median over the rounds and its [min-max] spread. */
 static void print_speed_table(const options *o, const scene_result *sr, const int selected[VARIANT_COUNT])
 {
-    const variant_result *base = baseline_of(sr);
-    char cell[48], heading[48];
-    printf("\nMrays/s, median of %d pass%s (ratios: this / Embree flat r4)\n", o->passes, o->passes == 1 ? "" : "es");
-    printf("%-20s", "variant");
-    for (int k = 0; k < RAY_KIND_COUNT; k++)
-        for (int t = 0; t < o->thread_count_count && o->ray_kind_enabled[k]; t++) {
-            snprintf(heading, sizeof heading, "%s %ut", ray_kind_names[k], o->thread_counts[t]);
-            printf(" %-15s", heading);
-        }
-    printf("\n");
-    for (int i = 0; i < VARIANT_COUNT; i++) {
-        const variant_result *r = &sr->variants[i];
-        if (!selected[i] || !r->measured)
-            continue;
-        printf("%-20s", all_variants[i].label);
+    char cell[64], heading[48];
+    for (int table = 0; table < 2; table++) {
+        if (table == 0)
+            printf("\nMrays/s: median of %d round%s [min-max]\n", o->rounds, o->rounds == 1 ? "" : "s");
+        else if (baseline_of(sr))
+            printf("\nthis / Embree flat r4, the ratio taken within each round: median [min-max]\n");
+        else
+            break;
+        printf("%-21s", "variant");
         for (int k = 0; k < RAY_KIND_COUNT; k++)
-            for (int t = 0; t < o->thread_count_count && o->ray_kind_enabled[k]; t++)
-                printf(" %-15s", with_ratio(cell, sizeof cell, "%.2f", r->mrays[k][t], base ? base->mrays[k][t] : NAN));
+            for (int t = 0; t < o->thread_count_count && o->ray_kind_enabled[k]; t++) {
+                snprintf(heading, sizeof heading, "%s %ut", ray_kind_names[k], o->thread_counts[t]);
+                printf(" %-17s", heading);
+            }
         printf("\n");
+        for (int i = 0; i < VARIANT_COUNT; i++) {
+            const variant_result *r = &sr->variants[i];
+            if (!selected[i] || !r->measured)
+                continue;
+            printf("%-21s", all_variants[i].label);
+            for (int k = 0; k < RAY_KIND_COUNT; k++)
+                for (int t = 0; t < o->thread_count_count && o->ray_kind_enabled[k]; t++) {
+                    spread x = table == 0 ? r->mrays[k][t] : r->ratio[k][t];
+                    if (isnan(x.median))
+                        snprintf(cell, sizeof cell, "-");
+                    else
+                        snprintf(cell, sizeof cell, "%.2f [%.2f-%.2f]", x.median, x.min, x.max);
+                    printf(" %-17s", cell);
+                }
+            printf("\n");
+        }
     }
 }
 
@@ -1087,7 +1156,7 @@ static void print_ablation_table(const options *o, const scene_result *results, 
             first = 0;
             for (int k = RAYS_PRIMARY; k <= RAYS_INCOHERENT; k++)
                 for (int t = 0; t < o->thread_count_count && o->ray_kind_enabled[k]; t++)
-                    printf(" %-13.2f", r->mrays[k][t]);
+                    printf(" %-13.2f", r->mrays[k][t].median);
             size_t inner = r->stats.aabb_nodes + r->stats.obb_nodes;
             printf(" %-8.1f %-9.1f %-8.3f %.1f\n", (double)r->memory_bytes / 1048576.0,
                    (double)r->memory_bytes / (double)results[s].segment_count, r->build_seconds,
@@ -1114,7 +1183,7 @@ static void print_tradeoff_table(const options *o, const scene_result *results, 
             if (!selected[i] || !all_variants[i].on_chart || !r->has_accuracy)
                 continue;
             printf("%-12s %-20s %-10.2f %-12.4f %-10.2e\n", first ? results[s].name : "", all_variants[i].label,
-                   r->mrays[RAYS_PRIMARY][0], disagreement_percent(&r->accuracy), r->accuracy.t_p99);
+                   r->mrays[RAYS_PRIMARY][0].median, disagreement_percent(&r->accuracy), r->accuracy.t_p99);
             first = 0;
         }
     }
@@ -1148,8 +1217,15 @@ static FILE *tsv_open(const options *o)
         for (int t = 0; t < o->thread_count_count; t++)
             fprintf(f, "\t%s_mrays_%ut", ray_kind_names[k], o->thread_counts[t]);
     fputs("\taccuracy_rays\tdisagreements\tdisagree_pct\tdt_r_median\tdt_r_p99\tdt_r_max\tdu_median\tdu_p99"
-          "\taccuracy_comparable\tchart_series\n",
+          "\taccuracy_comparable\tchart_series",
           f);
+    /* the spread over the rounds, and the within-round ratios to Embree flat r4 */
+    for (int k = 0; k < RAY_KIND_COUNT; k++)
+        for (int t = 0; t < o->thread_count_count; t++)
+            fprintf(f, "\t%s_mrays_%ut_min\t%s_mrays_%ut_max\t%s_ratio_%ut\t%s_ratio_%ut_min\t%s_ratio_%ut_max",
+                    ray_kind_names[k], o->thread_counts[t], ray_kind_names[k], o->thread_counts[t], ray_kind_names[k],
+                    o->thread_counts[t], ray_kind_names[k], o->thread_counts[t], ray_kind_names[k], o->thread_counts[t]);
+    fputs("\n", f);
     return f;
 }
 
@@ -1174,7 +1250,7 @@ static void tsv_write_scene(FILE *f, const options *o, const scene_result *sr, c
             fprintf(f, "\t%zu", sr->ray_counts[k]);
         for (int k = 0; k < RAY_KIND_COUNT; k++)
             for (int t = 0; t < o->thread_count_count; t++)
-                tsv_number(f, "\t%.4f", r->mrays[k][t]);
+                tsv_number(f, "\t%.4f", r->mrays[k][t].median);
         if (r->has_accuracy) {
             const accuracy_summary *a = &r->accuracy;
             fprintf(f, "\t%zu\t%zu", a->rays, a->disagreements);
@@ -1187,7 +1263,16 @@ static void tsv_write_scene(FILE *f, const options *o, const scene_result *sr, c
         } else {
             fputs("\t0\t0\tNaN\tNaN\tNaN\tNaN\tNaN\tNaN", f);
         }
-        fprintf(f, "\t%d\t%s\n", v->accuracy_comparable, v->on_chart ? (hairobb ? "hairobb" : "embree") : "-");
+        fprintf(f, "\t%d\t%s", v->accuracy_comparable, v->on_chart ? (hairobb ? "hairobb" : "embree") : "-");
+        for (int k = 0; k < RAY_KIND_COUNT; k++)
+            for (int t = 0; t < o->thread_count_count; t++) {
+                tsv_number(f, "\t%.4f", r->mrays[k][t].min);
+                tsv_number(f, "\t%.4f", r->mrays[k][t].max);
+                tsv_number(f, "\t%.4f", r->ratio[k][t].median);
+                tsv_number(f, "\t%.4f", r->ratio[k][t].min);
+                tsv_number(f, "\t%.4f", r->ratio[k][t].max);
+            }
+        fputs("\n", f);
     }
     fflush(f);
 }
@@ -1199,7 +1284,7 @@ static int has_chart_points(const scene_result *sr, const int selected[VARIANT_C
     for (int i = 0; i < VARIANT_COUNT; i++) {
         const variant_result *r = &sr->variants[i];
         if (sr->loaded && selected[i] && all_variants[i].on_chart && r->has_accuracy &&
-            isfinite(r->mrays[RAYS_PRIMARY][0]))
+            isfinite(r->mrays[RAYS_PRIMARY][0].median))
             return 1;
     }
     return 0;
@@ -1263,24 +1348,35 @@ static const char *draw_chart(const options *o, const scene_result *results, int
 /* Machine description                                                      */
 /* ======================================================================== */
 
+/* "model name (family F, model M), AVX-512: yes|no" from /proc/cpuinfo:
+   the family tells Zen 3 (25) from Zen 5 (26); machines here differ. */
 static void cpu_model(char *model, size_t size)
 {
-    char line[512];
-    snprintf(model, size, "unknown");
+    static char line[16384]; /* the flags line is long */
+    char name[256] = "unknown";
+    int family = -1, number = -1, avx512 = -1;
     FILE *f = fopen("/proc/cpuinfo", "r");
-    if (!f)
-        return;
-    while (fgets(line, sizeof line, f)) {
-        if (strncmp(line, "model name", 10) == 0) {
+    if (f) {
+        while (fgets(line, sizeof line, f)) {
             const char *value = strchr(line, ':');
-            if (value) {
-                value += 1 + strspn(value + 1, " \t");
-                snprintf(model, size, "%.*s", (int)strcspn(value, "\n"), value);
+            if (!value)
+                continue;
+            value += 1 + strspn(value + 1, " \t");
+            if (strncmp(line, "model name", 10) == 0)
+                snprintf(name, sizeof name, "%.*s", (int)strcspn(value, "\n"), value);
+            else if (strncmp(line, "cpu family", 10) == 0 && family < 0)
+                family = atoi(value);
+            else if (strncmp(line, "model", 5) == 0 && (line[5] == ' ' || line[5] == '\t') && number < 0)
+                number = atoi(value);
+            else if (strncmp(line, "flags", 5) == 0 && avx512 < 0) {
+                avx512 = strstr(value, "avx512f") != NULL;
+                break;
             }
-            break;
         }
+        fclose(f);
     }
-    fclose(f);
+    snprintf(model, size, "%s (family %d, model %d), AVX-512: %s", name, family, number,
+             avx512 < 0 ? "unknown" : avx512 ? "yes" : "no");
 }
 
 static void print_machine(const options *o)
@@ -1308,10 +1404,14 @@ static void print_machine(const options *o)
     printf(", flags: see Makefile (the $(B)/bench rule)");
 #endif
     printf(", SIMD: %s\n", simd_paths());
-    printf("hairobb %d.%d.%d, Embree %s; median of %d timed pass%s after 1 warm-up; blocks of %d rays "
-           "interleaved across threads\n",
-           HAIROBB_VERSION_MAJOR, HAIROBB_VERSION_MINOR, HAIROBB_VERSION_PATCH, RTC_VERSION_STRING, o->passes,
-           o->passes == 1 ? "" : "es", RAY_BLOCK);
+    if (o->profile)
+        printf("hairobb %d.%d.%d, Embree %s; profile: one untimed pass of each variant over each ray set, 1 thread\n",
+               HAIROBB_VERSION_MAJOR, HAIROBB_VERSION_MINOR, HAIROBB_VERSION_PATCH, RTC_VERSION_STRING);
+    else
+        printf("hairobb %d.%d.%d, Embree %s; %d timing round%s (every variant one pass a round, after a warm-up pass); "
+               "blocks of %d rays interleaved across threads\n",
+               HAIROBB_VERSION_MAJOR, HAIROBB_VERSION_MINOR, HAIROBB_VERSION_PATCH, RTC_VERSION_STRING, o->rounds,
+               o->rounds == 1 ? "" : "s", RAY_BLOCK);
     /* other work on the machine skews the figures, the threaded ones most */
     double load[3];
     FILE *f = fopen("/proc/loadavg", "r");
@@ -1350,7 +1450,8 @@ static void print_help(void)
            "                        sse2 (the SSE2 kernels, where the build has them: not with -mavx2 or -march)\n"
            "                      Embree: embree-r4, embree-r8, embree-r16 (flat), embree-round\n"
            "                      groups: all, hairobb, embree, precision, ablation\n"
-           "  --passes N          timed passes per measurement, median reported (default %d, 3..64)\n"
+           "  --rounds N          timing rounds, one pass of every variant each, after a warm-up pass;\n"
+           "                      medians and [min-max] reported (default %d, 1..64; --passes: the same)\n"
            "  --accuracy-rays N   primary rays checked against the reference, 0 = none (default %d)\n"
            "  --tsv FILE          every figure, one row per scene and variant (default %s)\n"
            "  --png FILE          run time against error chart, drawn by gnuplot if present (default %s)\n"
@@ -1359,8 +1460,11 @@ static void print_help(void)
            "                      else %s; skipped if absent)\n"
            "  --furball-path P    furBall_A.bin.gz (default %s)\n"
            "  --quiet             no progress on stderr (shown only when stderr is a terminal)\n"
+           "  --profile           no timing: one pass of each variant over each ray set on 1 thread,\n"
+           "                      a callgrind dump each (valgrind --collect-atstart=no), and a line\n"
+           "                      'profile' with the work per ray (bench/profile.sh: make profile)\n"
            "  --help              this text\n",
-           DEFAULT_SEGMENTS, DEFAULT_RESOLUTION, DEFAULT_PASSES, DEFAULT_ACCURACY_RAYS, DEFAULT_TSV_PATH,
+           DEFAULT_SEGMENTS, DEFAULT_RESOLUTION, DEFAULT_ROUNDS, DEFAULT_ACCURACY_RAYS, DEFAULT_TSV_PATH,
            DEFAULT_PNG_PATH, DEFAULT_PLOT_SCRIPT, TEST_DATA_STRAIGHT_HAIR_DEFAULT, SCENE_FURBALL_DEFAULT_PATH);
 }
 
@@ -1442,7 +1546,7 @@ static void default_options(options *o)
     if (cores > 1)
         o->thread_counts[o->thread_count_count++] = (unsigned)(cores < 256 ? cores : 256);
     o->variant_list = "all";
-    o->passes = DEFAULT_PASSES;
+    o->rounds = DEFAULT_ROUNDS;
     o->accuracy_rays = DEFAULT_ACCURACY_RAYS;
     o->tsv_path = DEFAULT_TSV_PATH;
     o->png_path = DEFAULT_PNG_PATH;
@@ -1470,6 +1574,10 @@ static int parse_options(int argc, char **argv, options *o)
             o->quiet = 1;
             continue;
         }
+        if (strcmp(name, "--profile") == 0) {
+            o->profile = 1;
+            continue;
+        }
         if (!value) {
             if (i + 1 >= argc) {
                 fprintf(stderr, "bench: %s needs a value (see --help)\n", name);
@@ -1492,9 +1600,9 @@ static int parse_options(int argc, char **argv, options *o)
             bad = parse_thread_counts(o, value);
         else if (strcmp(name, "--variants") == 0)
             o->variant_list = value;
-        else if (strcmp(name, "--passes") == 0) {
-            bad = parse_count(value, &count) || count < 3 || count > 64; /* a median needs 3 */
-            o->passes = (int)count;
+        else if (strcmp(name, "--rounds") == 0 || strcmp(name, "--passes") == 0) {
+            bad = parse_count(value, &count) || count < 1 || count > MAX_ROUNDS;
+            o->rounds = (int)count;
         } else if (strcmp(name, "--accuracy-rays") == 0)
             bad = parse_count(value, &o->accuracy_rays);
         else if (strcmp(name, "--tsv") == 0)
@@ -1524,6 +1632,45 @@ static int parse_options(int argc, char **argv, options *o)
 /* ======================================================================== */
 /* Main                                                                     */
 /* ======================================================================== */
+
+/* --profile: each variant built in turn and traced once over each ray set,
+   on this thread, between callgrind's zeroing and its dump (named after the
+   pass), then one tab-separated line:
+   profile scene variant library rays nodes leaves segments passed
+   (the counts are totals, from a -DBENCH_COUNTS build; 0 otherwise). */
+static void profile_scene(const options *o, workload *w, const int selected[VARIANT_COUNT], scene_result *sr)
+{
+    for (int i = 0; i < VARIANT_COUNT; i++) {
+        built_accel accel;
+        const variant *v = &all_variants[i];
+        if (!selected[i] || build_for_rounds(w, v, &accel, &sr->variants[i]) != 0)
+            continue;
+        for (int k = 0; k < RAY_KIND_COUNT; k++) {
+            char name[160];
+            const ray_set *rays = &w->rays[k];
+            if (!o->ray_kind_enabled[k] || rays->count == 0)
+                continue;
+            snprintf(name, sizeof name, "%s %s %s", sr->name, v->key, ray_kind_names[k]);
+#ifdef BENCH_COUNTS
+            memset(&bench_count, 0, sizeof bench_count);
+#endif
+            CALLGRIND_ZERO_STATS;
+            CALLGRIND_TOGGLE_COLLECT;
+            trace_pass(&accel.tracer, rays, w->hits, 1);
+            CALLGRIND_TOGGLE_COLLECT;
+            CALLGRIND_DUMP_STATS_AT(name);
+            printf("profile\t%s\t%s\t%s\t%s\t%zu", sr->name, v->key, ray_kind_names[k],
+                   v->lib == LIB_HAIROBB ? "hairobb" : "embree", rays->count);
+#ifdef BENCH_COUNTS
+            printf("\t%llu\t%llu\t%llu\t%llu\n", bench_count.node, bench_count.leaf, bench_count.segment,
+                   bench_count.segment_passed);
+#else
+            printf("\t0\t0\t0\t0\n");
+#endif
+        }
+        free_variant(&accel);
+    }
+}
 
 /* Loads, measures and prints one scene. Returns 0, or 1 on an error. */
 static int run_scene(const options *o, const char *name, const int selected[VARIANT_COUNT], scene_result *sr)
@@ -1555,9 +1702,27 @@ static int run_scene(const options *o, const char *name, const int selected[VARI
     sr->loaded = 1;
     for (int k = 0; k < RAY_KIND_COUNT; k++)
         sr->ray_counts[k] = w.rays[k].count;
+    if (o->profile) {
+        profile_scene(o, &w, selected, sr);
+        workload_free(&w);
+        return 0;
+    }
+    /* every variant built at once, so that the rounds can alternate them */
+    static built_accel accel[VARIANT_COUNT];
+    memset(accel, 0, sizeof accel);
     for (int i = 0; i < VARIANT_COUNT; i++)
         if (selected[i])
-            run_variant(o, &w, &all_variants[i], &sr->variants[i]);
+            build_for_rounds(&w, &all_variants[i], &accel[i], &sr->variants[i]);
+    time_in_rounds(o, &w, accel, sr);
+    for (int i = 0; i < VARIANT_COUNT; i++) {
+        variant_result *r = &sr->variants[i];
+        if (r->measured && w.has_accuracy) {
+            progress_start("  %s: accuracy", all_variants[i].label);
+            r->has_accuracy = accuracy_measure(&accel[i].tracer, &w.accuracy, &r->accuracy) == 0;
+            progress("%s", r->has_accuracy ? "done" : "out of memory");
+        }
+        free_variant(&accel[i]);
+    }
     print_scene_header(o, &w);
     print_build_table(sr, selected);
     print_speed_table(o, sr, selected);
@@ -1580,6 +1745,12 @@ int main(int argc, char **argv)
 
     print_machine(&o);
     static scene_result results[MAX_SCENES];
+    if (o.profile) {
+        int failures = 0;
+        for (int s = 0; s < o.scene_count; s++)
+            failures += run_scene(&o, o.scenes[s], selected, &results[s]);
+        return failures ? 1 : 0;
+    }
     FILE *tsv = tsv_open(&o);
     int failures = 0;
     for (int s = 0; s < o.scene_count; s++) {

@@ -1,0 +1,104 @@
+# profile.awk - instructions per ray from the callgrind dumps of
+# `build/bench --profile` (bench/profile.sh runs it), split by where they go,
+# and the work per ray from a -DBENCH_COUNTS build's 'profile' lines.
+#
+# usage: awk -f bench/profile.awk hairobb.h COUNTS callgrind.out.1 callgrind.out.2 ...
+#   hairobb.h  read for which function each of its lines belongs to;
+#   COUNTS     the counting build's output (lines "profile scene variant rays library count nodes ...");
+#   the dumps  one per pass, named "scene variant raykind" by the bench.
+# Prints a Markdown table, one row per pass.
+#
+# Where an instruction goes: the function of hairobb.h its source line is in
+# (inlined code keeps its own lines), or, for the header's generic helpers
+# (SIMD wrappers, scalar helpers) and compiler intrinsics, the function it
+# was compiled into. Dumps are read with --compress-strings=no and
+# --compress-pos=no: names and line numbers are spelled out.
+
+function category(name) {
+    if (name ~ /ray_setup|slab_setup|frame_from_direction/) return "setup"
+    if (name ~ /traverse|_node$|intersect_boxes|decode_rotation|far_scale|lowest_bit/) return "nodes"
+    if (name ~ /hit_at|bezier_v4/) return "hit"
+    if (name ~ /^hairobb_(intersect1|occluded1)|^hairobb__trace$|get_simd/) return "api"
+    if (name ~ /intersect_leaf|skipped|intersect_segment|to_ray_space|power_form|horner|ribbon_f|accept|try_hit|try_end|solve_bracketed|crosses|refine|joint_at|piece|chord_pad|intersect_curve|filtered_out/) return "segments"
+    return ""
+}
+
+# a compiled function's name without gcc's clone suffixes or the AVX2 copy's
+function plain(name) {
+    sub(/\..*$/, "", name)
+    sub(/_avx2$/, "", name)
+    return name
+}
+
+function where(    inner, c) {
+    if (object ~ /libembree/) return "embree"
+    if (file ~ /hairobb\.h$/) {
+        inner = function_at[line_number]
+        c = category(inner)
+        if (c == "") c = category(plain(fn))
+        return c == "" ? "other" : c
+    }
+    if (file ~ /bench\.c$|scenes\.h$/) return "harness"
+    c = category(plain(fn))
+    if (c != "") return c
+    if (plain(fn) ~ /_tracer_|^trace_block$|^trace_pass$|^parallel_for$|^worker_run$/) return "harness"
+    return "other"
+}
+
+FNR == 1 { part++ }
+
+# hairobb.h: function definitions start at column 0; prototypes end in ';'
+part == 1 {
+    if ($0 ~ /^(static|HAIROBB__INLINE|HAIROBB_DEF)/ && $0 !~ /;[ \t]*$/ && match($0, /hairobb_[A-Za-z0-9_]*\(/))
+        current = substr($0, RSTART, RLENGTH - 1)
+    function_at[FNR] = current
+    next
+}
+
+part == 2 {
+    if ($1 != "profile") next
+    key = $2 " " $3 " " $4
+    order[++passes] = key
+    scene[key] = $2; variant[key] = $3; kind[key] = $4; library[key] = $5; rays[key] = $6
+    nodes[key] = $7; leaves[key] = $8; segments[key] = $9; passed[key] = $10
+    next
+}
+
+# a dump: one pass
+FNR == 1 { key = ""; skip_call_cost = 0 }
+/^desc: Trigger: Client Request: / { key = substr($0, length("desc: Trigger: Client Request: ") + 1); next }
+/^ob=/ { object = substr($0, 4); next }
+/^fl=/ { source = substr($0, 4); file = source; next }
+/^fi=/ || /^fe=/ { file = substr($0, 4); next }
+/^fn=/ { fn = substr($0, 4); file = source; next }
+/^calls=/ { skip_call_cost = 1; next }
+/^[0-9]+ [0-9]+/ {
+    if (skip_call_cost) { skip_call_cost = 0; next }   # the call's inclusive cost: counted in the callee
+    if (key == "") next
+    line_number = $1 + 0
+    cost[key, where()] += $2
+    total[key] += $2
+}
+
+END {
+    n = split("setup nodes segments hit api harness embree other", columns, " ")
+    print "| scene | variant | rays | instructions/ray | / Embree's | ray set-up | nodes, traversal | leaves, segments | hit attributes | API | bench harness | inside Embree | other | nodes/ray | leaves/ray | segments/ray | passing 1st test/ray |"
+    print "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    for (p = 1; p <= passes; p++) {
+        k = order[p]
+        if (!(k in total)) { printf("| %s | %s %s | %d | no dump |\n", scene[k], variant[k], kind[k], rays[k]); continue }
+        r = rays[k] > 0 ? rays[k] : 1
+        base = ""
+        for (q = 1; q <= passes; q++)
+            if (library[order[q]] == "embree" && scene[order[q]] == scene[k] && kind[order[q]] == kind[k] && (order[q] in total)) {
+                base = order[q]; break
+            }
+        ratio = base == "" ? "-" : sprintf("%.2f", (total[k] / r) / (total[base] / (rays[base] > 0 ? rays[base] : 1)))
+        printf("| %s | %s %s | %d | %.0f | %s", scene[k], variant[k], kind[k], rays[k], total[k] / r, ratio)
+        for (c = 1; c <= n; c++) printf(" | %.0f", cost[k, columns[c]] / r)
+        if (library[k] == "hairobb")
+            printf(" | %.2f | %.2f | %.2f | %.2f |\n", nodes[k] / r, leaves[k] / r, segments[k] / r, passed[k] / r)
+        else
+            printf(" | - | - | - | - |\n")
+    }
+}

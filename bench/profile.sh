@@ -1,0 +1,32 @@
+#!/bin/sh
+# make profile: instructions per ray of hairobb and of Embree on the same
+# rays, counted by callgrind (exact and repeatable, whatever else the machine
+# is doing), split by where they go, with the nodes, leaves and segments a
+# ray visits. Decide speed work from these counts; confirm in wall-clock
+# time with the bench's rounds.
+#
+# usage: sh bench/profile.sh [bench options]
+#   default: --scene combed --res 256 --variants default,embree-r4 (all ray kinds)
+#   e.g. make profile PROFILE="--scene combed,straight --variants default,pieces8,embree-r4"
+# Writes build/profile/: the dumps, the bench's outputs, and profile.md (the table).
+B=build
+out=$B/profile
+set -e
+if ! command -v valgrind > /dev/null 2>&1; then
+    if [ "$(id -u)" = 0 ] && command -v apt-get > /dev/null 2>&1; then
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq valgrind >&2
+    else
+        echo "profile: valgrind is missing. Run: sudo apt-get install valgrind" >&2
+        exit 1
+    fi
+fi
+rm -rf "$out"
+mkdir -p "$out"
+args="--profile --quiet --accuracy-rays 0 --scene combed --res 256 --variants default,embree-r4 $*"
+# the baseline build (valgrind runs no AVX-512; the dispatch picks AVX2, as Embree does under it)
+valgrind --tool=callgrind --collect-atstart=no --compress-strings=no --compress-pos=no \
+    --callgrind-out-file="$out/callgrind.out" $B/bench $args > "$out/bench.txt" 2> "$out/valgrind.txt"
+$B/bench_counted $args > "$out/counts.txt"
+head -n 4 "$out/bench.txt"
+echo "callgrind: instructions per ray, 1 thread, the same rays for every variant ($out/profile.md)"
+awk -f bench/profile.awk hairobb.h "$out/counts.txt" $(ls "$out"/callgrind.out.* | sort -t. -k3 -n) | tee "$out/profile.md"
