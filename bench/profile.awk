@@ -2,7 +2,7 @@
 # `build/bench --profile` (bench/profile.sh runs it), split by where they go,
 # and the work per ray from a -DBENCH_COUNTS build's 'profile' lines.
 #
-# usage: awk -f bench/profile.awk hairobb.h COUNTS callgrind.out.1 callgrind.out.2 ...
+# usage: awk -f bench/profile.awk hairobb.h COUNTS callgrind.out.1 callgrind.out.2 ... (in dump order)
 #   hairobb.h  read for which function each of its lines belongs to;
 #   COUNTS     the counting build's output (lines "profile scene variant rays library count nodes ...");
 #   the dumps  one per pass, named "scene variant raykind" by the bench.
@@ -55,10 +55,12 @@ part == 1 {
     next
 }
 
+# the passes in the order they ran: pass p is the p-th dump
 part == 2 {
     if ($1 != "profile") next
-    key = $2 " " $3 " " $4
-    order[++passes] = key
+    key = ++passes
+    order[passes] = key
+    name[key] = $2 " " $3 " " $4
     scene[key] = $2; variant[key] = $3; kind[key] = $4; library[key] = $5; rays[key] = $6
     nodes[key] = $7; leaves[key] = $8; segments[key] = $9; passed[key] = $10
     next
@@ -66,7 +68,11 @@ part == 2 {
 
 # a dump: one pass
 FNR == 1 { key = ""; skip_call_cost = 0 }
-/^desc: Trigger: Client Request: / { key = substr($0, length("desc: Trigger: Client Request: ") + 1); next }
+/^desc: Trigger: Client Request: / {
+    key = part - 2
+    if (substr($0, length("desc: Trigger: Client Request: ") + 1) != name[key]) mismatch[key] = 1
+    next
+}
 /^ob=/ { object = substr($0, 4); next }
 /^fl=/ { source = substr($0, 4); file = source; next }
 /^fi=/ || /^fe=/ { file = substr($0, 4); next }
@@ -86,11 +92,14 @@ END {
     print "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     for (p = 1; p <= passes; p++) {
         k = order[p]
-        if (!(k in total)) { printf("| %s | %s %s | %d | no dump |\n", scene[k], variant[k], kind[k], rays[k]); continue }
+        if (!(k in total) || (k in mismatch)) {
+            printf("| %s | %s %s | %d | %s |\n", scene[k], variant[k], kind[k], rays[k], k in mismatch ? "dump of another pass" : "no dump")
+            continue
+        }
         r = rays[k] > 0 ? rays[k] : 1
         base = ""
         for (q = 1; q <= passes; q++)
-            if (library[order[q]] == "embree" && scene[order[q]] == scene[k] && kind[order[q]] == kind[k] && (order[q] in total)) {
+            if (library[order[q]] == "embree" && scene[order[q]] == scene[k] && kind[order[q]] == kind[k] && (order[q] in total) && !(order[q] in mismatch)) {
                 base = order[q]; break
             }
         ratio = base == "" ? "-" : sprintf("%.2f", (total[k] / r) / (total[base] / (rays[base] > 0 ? rays[base] : 1)))

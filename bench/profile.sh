@@ -22,7 +22,12 @@ if ! command -v valgrind > /dev/null 2>&1; then
 fi
 rm -rf "$out"
 mkdir -p "$out"
-args="--profile --quiet --accuracy-rays 0 --scene combed --res 256 --variants default,embree-r4 $*"
+# the defaults for what the caller leaves out (--scene adds scenes: given twice, one would run twice)
+args="--profile --quiet --accuracy-rays 0"
+case " $* " in *" --scene"*) ;; *) args="$args --scene combed" ;; esac
+case " $* " in *" --res"*) ;; *) args="$args --res 256" ;; esac
+case " $* " in *" --variants"*) ;; *) args="$args --variants default,embree-r4" ;; esac
+args="$args $*"
 # the baseline build (valgrind runs no AVX-512; the dispatch picks AVX2, as Embree does under it)
 valgrind --tool=callgrind --collect-atstart=no --compress-strings=no --compress-pos=no \
     --callgrind-out-file="$out/callgrind.out" $B/bench $args > "$out/bench.txt" 2> "$out/valgrind.txt"
