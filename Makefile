@@ -176,7 +176,9 @@ bench: $(B)/bench
 # where they go (bench/profile.sh; PROFILE="..." adds bench options)
 $(B)/bench_counted: bench/bench.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) -DBENCH_COUNTS $< -o $@ $(EMBREE) -lpthread $(LIBS)
-profile: $(B)/bench $(B)/bench_counted
+$(B)/bench_profile: bench/bench.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
+	$(CC) $(BASE) $(ARCH) -fno-pie -no-pie $< -o $@ $(EMBREE) -lpthread $(LIBS)
+profile: $(B)/bench_profile $(B)/bench_counted
 	sh bench/profile.sh $(PROFILE)
 
 examples: $(B)/minimal $(B)/render $(B)/embree_swap

@@ -1,18 +1,18 @@
 # profile.awk - instructions per ray from the callgrind dumps of
-# `build/bench --profile` (bench/profile.sh runs it), split by where they go,
-# and the work per ray from a -DBENCH_COUNTS build's 'profile' lines.
+# `build/bench_profile --profile` (bench/profile.sh runs it), split by where
+# they go, and the work per ray from a -DBENCH_COUNTS build's 'profile' lines.
 #
-# usage: awk -f bench/profile.awk hairobb.h COUNTS callgrind.out.1 callgrind.out.2 ... (in dump order)
-#   hairobb.h  read for which function each of its lines belongs to;
-#   COUNTS     the counting build's output (lines "profile scene variant rays library count nodes ...");
-#   the dumps  one per pass, named "scene variant raykind" by the bench.
+# usage: awk -f bench/profile.awk COUNTS CHAINS callgrind.out.1 callgrind.out.2 ... (in dump order)
+#   COUNTS  the counting build's output (lines "profile scene variant kind library rays nodes ...");
+#   CHAINS  `addr2line -a -i -f` of every address the dumps name in the bench binary: for each
+#           address, the function its instruction came from, then those it was inlined into;
+#   dumps   one per pass (--dump-instr=yes --compress-strings=no --compress-pos=no).
 # Prints a Markdown table, one row per pass.
 #
-# Where an instruction goes: the function of hairobb.h its source line is in
-# (inlined code keeps its own lines), or, for the header's generic helpers
-# (SIMD wrappers, scalar helpers) and compiler intrinsics, the function it
-# was compiled into. Dumps are read with --compress-strings=no and
-# --compress-pos=no: names and line numbers are spelled out.
+# An instruction goes to the innermost function of its inline chain that
+# has a category below; generic helpers (SIMD wrappers, scalar helpers,
+# compiler intrinsics) have none, so they count for what they were inlined
+# into.
 
 function category(name) {
     if (name ~ /ray_setup|slab_setup|frame_from_direction/) return "setup"
@@ -30,39 +30,33 @@ function plain(name) {
     return name
 }
 
-function where(    inner, c) {
+function where(address,    c) {
     if (object ~ /libembree/) return "embree"
-    if (file ~ /hairobb\.h$/) {
-        inner = function_at[line_number]
-        c = category(inner)
-        if (c == "") c = category(plain(fn))
-        return c == "" ? "other" : c
-    }
-    if (file ~ /bench\.c$|scenes\.h$/) return "harness"
+    if (address in category_of) return category_of[address]
     c = category(plain(fn))
-    if (c != "") return c
-    if (plain(fn) ~ /_tracer_|^trace_block$|^trace_pass$|^parallel_for$|^worker_run$/) return "harness"
-    return "other"
+    return c == "" ? "other" : c
 }
 
 FNR == 1 { part++ }
 
-# hairobb.h: function definitions start at column 0; prototypes end in ';'
-part == 1 {
-    if ($0 ~ /^(static|HAIROBB__INLINE|HAIROBB_DEF)/ && $0 !~ /;[ \t]*$/ && match($0, /hairobb_[A-Za-z0-9_]*\(/))
-        current = substr($0, RSTART, RLENGTH - 1)
-    function_at[FNR] = current
-    next
-}
-
 # the passes in the order they ran: pass p is the p-th dump
-part == 2 {
+part == 1 {
     if ($1 != "profile") next
     key = ++passes
     order[passes] = key
     name[key] = $2 " " $3 " " $4
     scene[key] = $2; variant[key] = $3; kind[key] = $4; library[key] = $5; rays[key] = $6
     nodes[key] = $7; leaves[key] = $8; segments[key] = $9; passed[key] = $10
+    next
+}
+
+# an address, then (function, place) pairs, innermost first
+part == 2 {
+    if ($0 ~ /^0x/) { address = $0; sub(/^0x0*/, "", address); pending = 1; next }
+    if (!pending || $0 ~ /:[0-9?]/) next   # a place, not a function
+    c = category(plain($0))
+    if (c != "") { category_of[address] = c; pending = 0; next }
+    if (plain($0) ~ /_tracer_|^trace_block$|^trace_pass$|^parallel_for$|^worker_run$/) category_of[address] = "harness"
     next
 }
 
@@ -74,16 +68,14 @@ FNR == 1 { key = ""; skip_call_cost = 0 }
     next
 }
 /^ob=/ { object = substr($0, 4); next }
-/^fl=/ { source = substr($0, 4); file = source; next }
-/^fi=/ || /^fe=/ { file = substr($0, 4); next }
-/^fn=/ { fn = substr($0, 4); file = source; next }
+/^fn=/ { fn = substr($0, 4); next }
 /^calls=/ { skip_call_cost = 1; next }
-/^[0-9]+ [0-9]+/ {
+/^0x[0-9a-f]+ [0-9]+ [0-9]+/ {
     if (skip_call_cost) { skip_call_cost = 0; next }   # the call's inclusive cost: counted in the callee
     if (key == "") next
-    line_number = $1 + 0
-    cost[key, where()] += $2
-    total[key] += $2
+    address = $1; sub(/^0x0*/, "", address)
+    cost[key, where(address)] += $3
+    total[key] += $3
 }
 
 END {

@@ -28,10 +28,16 @@ case " $* " in *" --scene"*) ;; *) args="$args --scene combed" ;; esac
 case " $* " in *" --res"*) ;; *) args="$args --res 256" ;; esac
 case " $* " in *" --variants"*) ;; *) args="$args --variants default,embree-r4" ;; esac
 args="$args $*"
-# the baseline build (valgrind runs no AVX-512; the dispatch picks AVX2, as Embree does under it)
-valgrind --tool=callgrind --collect-atstart=no --compress-strings=no --compress-pos=no \
-    --callgrind-out-file="$out/callgrind.out" $B/bench $args > "$out/bench.txt" 2> "$out/valgrind.txt"
+# the baseline build, not position-independent so that the dumps' addresses
+# are the binary's own (valgrind runs no AVX-512; the dispatch picks AVX2, as
+# Embree does under it)
+valgrind --tool=callgrind --collect-atstart=no --dump-instr=yes --compress-strings=no --compress-pos=no \
+    --callgrind-out-file="$out/callgrind.out" $B/bench_profile $args > "$out/bench.txt" 2> "$out/valgrind.txt"
 $B/bench_counted $args > "$out/counts.txt"
+dumps=$(ls "$out"/callgrind.out.* | sort -t. -k3 -n)
+# each address of the bench binary, with the functions it was inlined from
+awk '/^ob=/ { mine = index($0, "bench_profile") > 0 } /^calls=/ { getline; next } mine && /^0x/ { print $1 }' $dumps |
+    sort -u | addr2line -a -i -f -e $B/bench_profile > "$out/chains.txt"
 head -n 4 "$out/bench.txt"
 echo "callgrind: instructions per ray, 1 thread, the same rays for every variant ($out/profile.md)"
-awk -f bench/profile.awk hairobb.h "$out/counts.txt" $(ls "$out"/callgrind.out.* | sort -t. -k3 -n) | tee "$out/profile.md"
+awk -f bench/profile.awk "$out/counts.txt" "$out/chains.txt" $dumps | tee "$out/profile.md"
