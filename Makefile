@@ -140,8 +140,12 @@ $(B)/check_test_secondary: tests/test_secondary.c hairobb.h tests/reference.h te
 $(B)/test_hair: tests/test_hair.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
 
-$(B)/bench: bench/bench.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
-	$(CC) $(BASE) $(ARCH) -DBENCH_CFLAGS='"$(BASE) $(ARCH)"' $< -o $@ $(EMBREE) -lpthread $(LIBS)
+# the bench, and its two builds for `make profile` (below)
+BENCH_FLAGS_bench         = -DBENCH_CFLAGS='"$(BASE) $(ARCH)"'
+BENCH_FLAGS_bench_counted = -DBENCH_COUNTS
+BENCH_FLAGS_bench_profile = -fno-pie -no-pie
+$(B)/bench $(B)/bench_counted $(B)/bench_profile: bench/bench.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
+	$(CC) $(BASE) $(ARCH) $(BENCH_FLAGS_$(@F)) $< -o $@ $(EMBREE) -lpthread $(LIBS)
 
 # The header must compile clean as users compile it: gcc and clang, C99 and
 # C++11, -Werror, static, plain C.
@@ -173,11 +177,9 @@ bench: $(B)/bench
 	$(B)/bench
 
 # instructions per ray under callgrind, hairobb against Embree, split by
-# where they go (bench/profile.sh; PROFILE="..." adds bench options)
-$(B)/bench_counted: bench/bench.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
-	$(CC) $(BASE) $(ARCH) -DBENCH_COUNTS $< -o $@ $(EMBREE) -lpthread $(LIBS)
-$(B)/bench_profile: bench/bench.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
-	$(CC) $(BASE) $(ARCH) -fno-pie -no-pie $< -o $@ $(EMBREE) -lpthread $(LIBS)
+# where they go (bench/profile.sh; PROFILE="..." adds bench options): the
+# bench counting each ray's nodes, leaves and segments, and the bench at
+# fixed addresses for addr2line
 profile: $(B)/bench_profile $(B)/bench_counted
 	sh bench/profile.sh $(PROFILE)
 

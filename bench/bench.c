@@ -427,20 +427,23 @@ static int compare_doubles(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-/* Median, min and max of n values (sorted in place); NaN for none. */
+/* Median, min and max of n <= MAX_ROUNDS values (left in their order: a
+   round's figures pair with the baseline's of the same round); NaN for none. */
 typedef struct spread {
     double median, min, max;
 } spread;
 
-static spread spread_of(double *values, int n)
+static spread spread_of(const double *values, int n)
 {
     spread out = {NAN, NAN, NAN};
-    if (n <= 0)
+    double sorted[MAX_ROUNDS];
+    if (n <= 0 || n > MAX_ROUNDS)
         return out;
-    qsort(values, (size_t)n, sizeof values[0], compare_doubles);
-    out.median = n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-    out.min = values[0];
-    out.max = values[n - 1];
+    memcpy(sorted, values, (size_t)n * sizeof sorted[0]);
+    qsort(sorted, (size_t)n, sizeof sorted[0], compare_doubles);
+    out.median = n % 2 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
+    out.min = sorted[0];
+    out.max = sorted[n - 1];
     return out;
 }
 
@@ -854,7 +857,7 @@ static void free_variant(built_accel *b)
 
 /* Builds a variant and records its build time, memory and tree; 1 if the
    build failed. */
-static int build_for_rounds(workload *w, const variant *v, built_accel *accel, variant_result *r)
+static int build_and_record(workload *w, const variant *v, built_accel *accel, variant_result *r)
 {
     for (int k = 0; k < RAY_KIND_COUNT; k++)
         for (int t = 0; t < MAX_THREAD_COUNTS; t++)
@@ -1643,7 +1646,7 @@ static void profile_scene(const options *o, workload *w, const int selected[VARI
     for (int i = 0; i < VARIANT_COUNT; i++) {
         built_accel accel;
         const variant *v = &all_variants[i];
-        if (!selected[i] || build_for_rounds(w, v, &accel, &sr->variants[i]) != 0)
+        if (!selected[i] || build_and_record(w, v, &accel, &sr->variants[i]) != 0)
             continue;
         for (int k = 0; k < RAY_KIND_COUNT; k++) {
             char name[160];
@@ -1712,7 +1715,7 @@ static int run_scene(const options *o, const char *name, const int selected[VARI
     memset(accel, 0, sizeof accel);
     for (int i = 0; i < VARIANT_COUNT; i++)
         if (selected[i])
-            build_for_rounds(&w, &all_variants[i], &accel[i], &sr->variants[i]);
+            build_and_record(&w, &all_variants[i], &accel[i], &sr->variants[i]);
     time_in_rounds(o, &w, accel, sr);
     for (int i = 0; i < VARIANT_COUNT; i++) {
         variant_result *r = &sr->variants[i];

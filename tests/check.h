@@ -28,11 +28,15 @@ static inline void check_skip(const char *why)
     printf("SKIP %s\n", why);
 }
 
-/* The path of a data file the next cases need, or NULL after reporting it:
-   a skip, or a failure where it must be there (HAIROBB_REQUIRE_DATA=1, or
-   HAIROBB_STRAIGHT_HAIR naming a file that is not). */
-static inline const char *check_data(test_data_status status, const char *path, const char *why)
+/* The path of a data file the next cases need (found by a lookup of
+   test_data.h), or NULL after reporting it: a skip, or a failure where it
+   must be there (HAIROBB_REQUIRE_DATA=1, or HAIROBB_STRAIGHT_HAIR naming a
+   file that is not). */
+static inline const char *check_data(test_data_status (*lookup)(const char **path, char why[TEST_DATA_WHY_SIZE]))
 {
+    const char *path;
+    char why[TEST_DATA_WHY_SIZE];
+    test_data_status status = lookup(&path, why);
     if (status == TEST_DATA_FOUND) return path;
     if (status == TEST_DATA_ABSENT && !test_data_required()) {
         check_skip(why);
@@ -41,22 +45,6 @@ static inline const char *check_data(test_data_status status, const char *path, 
         printf("FAIL %s%s\n", why, status == TEST_DATA_ABSENT ? " (HAIROBB_REQUIRE_DATA is set)" : "");
     }
     return NULL;
-}
-
-static inline const char *check_straight_hair(void)
-{
-    const char *path;
-    char why[TEST_DATA_WHY_SIZE];
-    test_data_status status = test_data_straight_hair(&path, why);
-    return check_data(status, path, why);
-}
-
-static inline const char *check_furball(void)
-{
-    const char *path;
-    char why[TEST_DATA_WHY_SIZE];
-    test_data_status status = test_data_furball(&path, why);
-    return check_data(status, path, why);
 }
 
 static inline int check_summary(void)

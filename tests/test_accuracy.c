@@ -144,12 +144,12 @@ int main(void)
     else CHECK(0, "curly scene");
     if (scene_random(&s, 100000, 3) == 0) { check_scene(&s); scene_free(&s); }
     else CHECK(0, "random scene");
-    if ((path = check_straight_hair()) != NULL) {
+    if ((path = check_data(test_data_straight_hair)) != NULL) {
         r = scene_load_hair(&s, path);
         CHECK(r == 0, "load %s", path);
         if (r == 0) { check_scene(&s); scene_free(&s); }
     }
-    if ((path = check_furball()) != NULL) {
+    if ((path = check_data(test_data_furball)) != NULL) {
         r = scene_load_furball(&s, path);
         CHECK(r == 0, "load %s", path);
         if (r == 0) { check_scene(&s); scene_free(&s); }

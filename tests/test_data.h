@@ -14,7 +14,7 @@
    HAIROBB_REQUIRE_DATA=1 (CI sets it) turns an absent file into a failure,
    so that a lost data path cannot hide behind a skip.
 
-   No harness here: tests/check.h reports through it (check_straight_hair),
+   No harness here: tests/check.h reports through it (check_data),
    the bench uses the lookup alone. Header-only, static inline, C99/C++. */
 #ifndef HAIROBB_TESTS_TEST_DATA_H
 #define HAIROBB_TESTS_TEST_DATA_H

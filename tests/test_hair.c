@@ -447,6 +447,6 @@ int main(void)
     test_lying_headers();
     test_allocation_failure();
     test_files();
-    test_straight_hair(check_straight_hair());
+    test_straight_hair(check_data(test_data_straight_hair));
     return check_summary();
 }

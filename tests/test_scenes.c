@@ -527,8 +527,8 @@ static void test_embree(const char *straight_path, const char *furball_path)
 int main(void)
 {
     /* the data files, found by tests/test_data.h's rule (each reported once) */
-    const char *straight_path = check_straight_hair();
-    const char *furball_path = check_furball();
+    const char *straight_path = check_data(test_data_straight_hair);
+    const char *furball_path = check_data(test_data_furball);
 
     test_catmull_rom();
     test_generators();
