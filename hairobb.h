@@ -2037,8 +2037,16 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
             hairobb__node_box(b, &ranges[i], frame, node->centre, lower[i], upper[i]);
         }
         hairobb__store_compressed(node->step, node->lower, node->upper, count, (const float (*)[3])lower, (const float (*)[3])upper);
-        for (i = count; i < HAIROBB__W; ++i)    /* empty lanes: the identity, so their inverted boxes miss */
+        /* Empty lanes: the identity and the point box at -128 steps on each
+           axis, outside every child. An inverted box would not do: this
+           node's test takes each slab's planes in either order, which turns
+           it into the whole cube of steps (1.24 visits of empty children a
+           ray on combed fur, before). */
+        for (i = count; i < HAIROBB__W; ++i) {
+            int k;
             node->rotation[0][i] = node->rotation[4][i] = node->rotation[8][i] = 127;
+            for (k = 0; k < 3; ++k) node->lower[k][i] = node->upper[k][i] = -128;
+        }
         for (i = 0; i < HAIROBB__W; ++i) node->child[i] = HAIROBB__REF_EMPTY;
     } else if (node_type == HAIROBB__REF_QAABB || node_type == HAIROBB__REF_QOBB) {
         hairobb__compressed_node *node = HAIROBB__CAST(hairobb__compressed_node *, (void *)(b->nodes + offset));
@@ -2841,12 +2849,15 @@ HAIROBB__INLINE int hairobb__intersect_boxes(const float *planes, const hairobb_
                                              const hairobb__ray_state *rs, float dist[HAIROBB__W])
 {
     hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
-    int k;
-    for (k = 0; k < 3; ++k) {
-        hairobb__vn o = hairobb__vn_set1(slab->org[k]), r = hairobb__vn_set1(slab->rdir[k]);
-        tn = hairobb__vn_max(hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_load(planes + slab->near_plane[k]), o), r), tn);
-        tf = hairobb__vn_min(hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_load(planes + slab->far_plane[k]), o), r), tf);
-    }
+#define HAIROBB__SLAB_AXIS(k) do { \
+        hairobb__vn o = hairobb__vn_set1(slab->org[k]), r = hairobb__vn_set1(slab->rdir[k]); \
+        tn = hairobb__vn_max(hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_load(planes + slab->near_plane[k]), o), r), tn); \
+        tf = hairobb__vn_min(hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_load(planes + slab->far_plane[k]), o), r), tf); \
+    } while (0)
+    HAIROBB__SLAB_AXIS(0);   /* written out, as in hairobb__intersect_compressed_obb_node */
+    HAIROBB__SLAB_AXIS(1);
+    HAIROBB__SLAB_AXIS(2);
+#undef HAIROBB__SLAB_AXIS
     hairobb__vn_store(dist, tn);
     return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
 }
@@ -2903,8 +2914,12 @@ HAIROBB__INLINE int hairobb__intersect_compressed_node(const hairobb__compressed
 }
 
 /* Each child's rotation decoded as in the builder, the ray transformed per
-   child (lanes), then slab tests against its decoded byte planes; 1/d
-   clamped as in hairobb__intersect_obb_node. */
+   child (lanes), then slab tests against its decoded byte planes. 1/d is
+   not clamped: where d = 0 it is +-inf, which puts t at +-inf (the ray
+   outside or inside the slab, as it is), or at NaN on a plane, and min and
+   max then keep the other operand (SSE's NaN rule, which the plain C twins
+   share): a slab the ray runs along does not cut its interval. The axes are
+   written out: a loop over them costs 4 instructions an axis. */
 HAIROBB__INLINE int hairobb__intersect_compressed_obb_node(const hairobb__compressed_obb_node *node,
                                                            const hairobb__ray_state *rs, float dist[HAIROBB__W])
 {
@@ -2913,32 +2928,31 @@ HAIROBB__INLINE int hairobb__intersect_compressed_obb_node(const hairobb__compre
     hairobb__vn oz = hairobb__vn_set1(rs->org[2] - node->centre[2]);
     hairobb__vn dx = hairobb__vn_set1(rs->dir[0]), dy = hairobb__vn_set1(rs->dir[1]), dz = hairobb__vn_set1(rs->dir[2]);
     hairobb__vn one = hairobb__vn_set1(1.0f);
-    hairobb__vn big = hairobb__vn_set1(1.0f / HAIROBB__TINY_DIR), neg_big = hairobb__vn_set1(-(1.0f / HAIROBB__TINY_DIR));
-    int k;
-    for (k = 0; k < 3; ++k) {
-        hairobb__vn m0 = hairobb__vn_from_bytes(node->rotation[3 * k]), m1 = hairobb__vn_from_bytes(node->rotation[3 * k + 1]);
-        hairobb__vn m2 = hairobb__vn_from_bytes(node->rotation[3 * k + 2]);
-        hairobb__vn o = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, ox), hairobb__vn_mul(m1, oy)), hairobb__vn_mul(m2, oz));
-        hairobb__vn d = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, dx), hairobb__vn_mul(m1, dy)), hairobb__vn_mul(m2, dz));
-        hairobb__vn r = hairobb__vn_min(hairobb__vn_max(hairobb__vn_div(one, d), neg_big), big);
-        hairobb__vn step = hairobb__vn_set1(node->step[k]);
-        hairobb__vn t0 = hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_mul(hairobb__vn_from_bytes(node->lower[k]), step), o), r);
-        hairobb__vn t1 = hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_mul(hairobb__vn_from_bytes(node->upper[k]), step), o), r);
-        tn = hairobb__vn_max(hairobb__vn_min(t0, t1), tn);
-        tf = hairobb__vn_min(hairobb__vn_max(t0, t1), tf);
-    }
+#define HAIROBB__QOBB_AXIS(k) do { \
+        hairobb__vn m0 = hairobb__vn_from_bytes(node->rotation[3 * (k)]), m1 = hairobb__vn_from_bytes(node->rotation[3 * (k) + 1]); \
+        hairobb__vn m2 = hairobb__vn_from_bytes(node->rotation[3 * (k) + 2]); \
+        hairobb__vn o = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, ox), hairobb__vn_mul(m1, oy)), hairobb__vn_mul(m2, oz)); \
+        hairobb__vn d = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, dx), hairobb__vn_mul(m1, dy)), hairobb__vn_mul(m2, dz)); \
+        hairobb__vn r = hairobb__vn_div(one, d), step = hairobb__vn_set1(node->step[k]); \
+        hairobb__vn t0 = hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_mul(hairobb__vn_from_bytes(node->lower[k]), step), o), r); \
+        hairobb__vn t1 = hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_mul(hairobb__vn_from_bytes(node->upper[k]), step), o), r); \
+        tn = hairobb__vn_max(hairobb__vn_min(t0, t1), tn); \
+        tf = hairobb__vn_min(hairobb__vn_max(t0, t1), tf); \
+    } while (0)
+    HAIROBB__QOBB_AXIS(0);
+    HAIROBB__QOBB_AXIS(1);
+    HAIROBB__QOBB_AXIS(2);
+#undef HAIROBB__QOBB_AXIS
     hairobb__vn_store(dist, tn);
     return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
 }
 
-/* Each child's slab pair along a row of its map is [0, 1] in unit space.
-   1/d is clamped to +-1/tiny, which is 1/d with d replaced by +-tiny where
-   |d| < tiny (as hairobb__slab_setup does), in two operations. */
+/* Each child's slab pair along a row of its map is [0, 1] in unit space;
+   1/d unclamped, as in hairobb__intersect_compressed_obb_node. */
 HAIROBB__INLINE int hairobb__intersect_obb_node(const hairobb__obb_node *node, const hairobb__ray_state *rs, float dist[HAIROBB__W])
 {
     hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
     hairobb__vn one = hairobb__vn_set1(1.0f), zero = hairobb__vn_set1(0.0f);
-    hairobb__vn big = hairobb__vn_set1(1.0f / HAIROBB__TINY_DIR), neg_big = hairobb__vn_set1(-(1.0f / HAIROBB__TINY_DIR));
     hairobb__vn ox = hairobb__vn_set1(rs->org[0] - node->centre[0]), oy = hairobb__vn_set1(rs->org[1] - node->centre[1]);
     hairobb__vn oz = hairobb__vn_set1(rs->org[2] - node->centre[2]);
     hairobb__vn dx = hairobb__vn_set1(rs->dir[0]), dy = hairobb__vn_set1(rs->dir[1]), dz = hairobb__vn_set1(rs->dir[2]);
@@ -2947,7 +2961,7 @@ HAIROBB__INLINE int hairobb__intersect_obb_node(const hairobb__obb_node *node, c
         hairobb__vn m2 = hairobb__vn_load(node->xfm[3 * (row) + 2]), m3 = hairobb__vn_load(node->xfm[9 + (row)]); \
         hairobb__vn o = hairobb__vn_add(hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, ox), hairobb__vn_mul(m1, oy)), hairobb__vn_mul(m2, oz)), m3); \
         hairobb__vn d = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, dx), hairobb__vn_mul(m1, dy)), hairobb__vn_mul(m2, dz)); \
-        hairobb__vn r = hairobb__vn_min(hairobb__vn_max(hairobb__vn_div(one, d), neg_big), big); \
+        hairobb__vn r = hairobb__vn_div(one, d); \
         hairobb__vn t0 = hairobb__vn_mul(hairobb__vn_sub(zero, o), r); \
         hairobb__vn t1 = hairobb__vn_mul(hairobb__vn_sub(one, o), r); \
         tn = hairobb__vn_max(hairobb__vn_min(t0, t1), tn); \
