@@ -36,12 +36,14 @@ static void count_missed(void *user, uint32_t prim, const ref_hit *hit)
     m->missed += !m->reached[prim];
 }
 
-/* Camera rays, and random rays through the bounds (any direction, some with
-   a tnear/tfar window), against one BVH. */
+/* Camera rays, random rays through the bounds (any direction, some with a
+   tnear/tfar window), and rays along the axes and the axis planes, where
+   direction components are exactly 0 and so are the ray's direction
+   components in frames of whole byte rows (1/d infinite), against one BVH. */
 static void check_bvh(const char *name, const hair_scene *s, const ref_scene *reference, const hairobb_build_options *options)
 {
     hairobb_bvh *bvh = NULL;
-    int side = 48, rays = side * side * 2, i;
+    int side = 48, rays = side * side * 3, i;
     float *org = (float *)malloc(3 * sizeof(float) * (size_t)rays), *dir = (float *)malloc(3 * sizeof(float) * (size_t)rays);
     missed m = {NULL, 0, 0};
     size_t total_reached = 0, hits = 0;
@@ -54,6 +56,14 @@ static void check_bvh(const char *name, const hair_scene *s, const ref_scene *re
     for (i = side * side; i < rays; ++i) {
         scene_vec3 d = scene_random_unit_vector(&rng);
         int k;
+        if (i >= 2 * side * side) {
+            /* one or two components zeroed, the rest +-1, normalised */
+            int keep = i % 6;
+            float c[3], length;
+            for (k = 0; k < 3; ++k) c[k] = (keep < 3 ? k == keep : k != keep - 3) ? (scene_rng_float(&rng) < 0.5f ? -1.0f : 1.0f) : 0.0f;
+            length = sqrtf(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+            d.x = c[0] / length; d.y = c[1] / length; d.z = c[2] / length;
+        }
         for (k = 0; k < 3; ++k) {
             float extent = s->upper[k] - s->lower[k];
             org[3 * i + k] = s->lower[k] + extent * scene_rng_float(&rng);
