@@ -2679,6 +2679,7 @@ static int hairobb__ray_setup_from(hairobb__ray_state *rs, const hairobb_bvh *bv
 typedef __m128 hairobb__v4;
 static inline hairobb__v4 hairobb__v4_load(const float *p) { return _mm_loadu_ps(p); }
 static inline hairobb__v4 hairobb__v4_set1(float x) { return _mm_set1_ps(x); }
+static inline hairobb__v4 hairobb__v4_set3(float x, float y, float z) { return _mm_setr_ps(x, y, z, 0.0f); }
 static inline hairobb__v4 hairobb__v4_add(hairobb__v4 a, hairobb__v4 b) { return _mm_add_ps(a, b); }
 static inline hairobb__v4 hairobb__v4_sub(hairobb__v4 a, hairobb__v4 b) { return _mm_sub_ps(a, b); }
 static inline hairobb__v4 hairobb__v4_mul(hairobb__v4 a, hairobb__v4 b) { return _mm_mul_ps(a, b); }
@@ -2722,6 +2723,7 @@ typedef struct hairobb__v4 { float f[4]; } hairobb__v4;
 #define HAIROBB__V4_MAP(expr) hairobb__v4 r; int i; for (i = 0; i < 4; ++i) r.f[i] = (expr); return r
 static inline hairobb__v4 hairobb__v4_load(const float *p) { HAIROBB__V4_MAP(p[i]); }
 static inline hairobb__v4 hairobb__v4_set1(float x) { HAIROBB__V4_MAP(x); }
+static inline hairobb__v4 hairobb__v4_set3(float x, float y, float z) { HAIROBB__V4_MAP(i == 0 ? x : i == 1 ? y : i == 2 ? z : 0.0f); }
 static inline hairobb__v4 hairobb__v4_add(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] + b.f[i]); }
 static inline hairobb__v4 hairobb__v4_sub(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] - b.f[i]); }
 static inline hairobb__v4 hairobb__v4_mul(hairobb__v4 a, hairobb__v4 b) { HAIROBB__V4_MAP(a.f[i] * b.f[i]); }
@@ -3366,6 +3368,20 @@ static float hairobb__chord_pad(const hairobb__ray_curve *c, int pieces, float m
            (0.75f / (float)(pieces * pieces)) + magnitude * (8.0f * FLT_EPSILON);
 }
 
+/* x, y, r at one end of each of 8 pieces: the weights w[i] of control
+   point i, lane = piece. */
+HAIROBB__INLINE void hairobb__piece_ends(const float (*w)[8], const hairobb__ray_curve *c, hairobb__v8 *x, hairobb__v8 *y,
+                                         hairobb__v8 *r)
+{
+    hairobb__v8 w0 = hairobb__v8_load(w[0]), w1 = hairobb__v8_load(w[1]), w2 = hairobb__v8_load(w[2]), w3 = hairobb__v8_load(w[3]);
+#define HAIROBB__EVAL(v) hairobb__v8_add(hairobb__v8_add(hairobb__v8_add(hairobb__v8_mul(w0, hairobb__v8_set1(v[0])), \
+        hairobb__v8_mul(w1, hairobb__v8_set1(v[1]))), hairobb__v8_mul(w2, hairobb__v8_set1(v[2]))), hairobb__v8_mul(w3, hairobb__v8_set1(v[3])))
+    *x = HAIROBB__EVAL(c->x);
+    *y = HAIROBB__EVAL(c->y);
+    *r = HAIROBB__EVAL(c->r);
+#undef HAIROBB__EVAL
+}
+
 /* magnitude: the largest |x|, |y| of the control points */
 static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *rs, const hairobb__ray_curve *c,
                                     float magnitude, uint32_t prim, int any_hit)
@@ -3380,17 +3396,8 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
         hairobb__v8 dx, dy, len2, s, px, py, reach;
         unsigned bits, inside;
         float s_lanes[8];
-        int e;
-        for (e = 0; e < 2; ++e) {
-            hairobb__v8 w0 = hairobb__v8_load(w[e][0]), w1 = hairobb__v8_load(w[e][1]);
-            hairobb__v8 w2 = hairobb__v8_load(w[e][2]), w3 = hairobb__v8_load(w[e][3]);
-#define HAIROBB__EVAL(v) hairobb__v8_add(hairobb__v8_add(hairobb__v8_add(hairobb__v8_mul(w0, hairobb__v8_set1(v[0])), \
-        hairobb__v8_mul(w1, hairobb__v8_set1(v[1]))), hairobb__v8_mul(w2, hairobb__v8_set1(v[2]))), hairobb__v8_mul(w3, hairobb__v8_set1(v[3])))
-            end_x[e] = HAIROBB__EVAL(c->x);
-            end_y[e] = HAIROBB__EVAL(c->y);
-            end_r[e] = HAIROBB__EVAL(c->r);
-#undef HAIROBB__EVAL
-        }
+        hairobb__piece_ends(w[0], c, &end_x[0], &end_y[0], &end_r[0]);
+        hairobb__piece_ends(w[1], c, &end_x[1], &end_y[1], &end_r[1]);
         /* closest point of each chord to the ray axis (Nakamaru and Ohno) */
         dx = hairobb__v8_sub(end_x[1], end_x[0]);
         dy = hairobb__v8_sub(end_y[1], end_y[0]);
@@ -3515,7 +3522,7 @@ static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *r
 
 /* hairobb__bezier's value and first derivative for 4 curves at once, one
    per lane, rounded as it rounds: rows p0..p3 hold the control points. */
-static void hairobb__bezier_v4(hairobb__v4 p0, hairobb__v4 p1, hairobb__v4 p2, hairobb__v4 p3, float u,
+HAIROBB__INLINE void hairobb__bezier_v4(hairobb__v4 p0, hairobb__v4 p1, hairobb__v4 p2, hairobb__v4 p3, float u,
                                hairobb__v4 *value, hairobb__v4 *d1)
 {
     float s = 1.0f - u;
@@ -3536,19 +3543,18 @@ static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs
                             hairobb_hit *hit)
 {
     const float *cp = bvh->vertices + 4 * (size_t)bvh->indices[prim];
-    hairobb__v4 qx, qy, qz, x4, y4, z4, r4, value, d1;
-    float at[4], tangent_at[4], tangent_xy[2], x, y, r, tlen2, along, n[3], nlen;
+    hairobb__v4 qx, qy, qz, x4, y4, z4, r4, value, d1, tangent, neg_dir, n4;
+    float at[4], tangent_at[4], tangent_xy[2], x, y, r, tlen2, along, n[4], nlen;
     const float *unit_dir = rs->frame + 6;
-    int k;
     hairobb__bezier_v4(hairobb__v4_load(cp), hairobb__v4_load(cp + 4), hairobb__v4_load(cp + 8), hairobb__v4_load(cp + 12),
-                       u, &value, &d1);
-    hairobb__v4_store(tangent_at, d1);
-    for (k = 0; k < 3; ++k) hit->tangent[k] = tangent_at[k];
+                       u, &value, &tangent);
+    hairobb__v4_store(tangent_at, tangent);
+    memcpy(hit->tangent, tangent_at, sizeof hit->tangent);
     hairobb__ray_points_v4(rs, cp, &qx, &qy, &qz, &r4);
     x4 = hairobb__ray_row_v4(rs, 0, qx, qy, qz);
     y4 = hairobb__ray_row_v4(rs, 1, qx, qy, qz);
-    z4 = hairobb__ray_row_v4(rs, 2, qx, qy, qz);
-    hairobb__v4_transpose(&x4, &y4, &z4, &r4);     /* rows: control points (x, y, z, r) */
+    z4 = hairobb__v4_set1(0.0f);                   /* z is not needed */
+    hairobb__v4_transpose(&x4, &y4, &z4, &r4);     /* rows: control points (x, y, 0, r) */
     hairobb__bezier_v4(x4, y4, z4, r4, u, &value, &d1);
     hairobb__v4_store(at, value);
     hairobb__v4_store(tangent_at, d1);
@@ -3560,12 +3566,17 @@ static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs
         hit->v = (tangent_xy[1] * x - tangent_xy[0] * y) / (sqrtf(tlen2) * r);
         hit->v = hairobb__maxf(-1.0f, hairobb__minf(1.0f, hit->v));
     }
-    /* the ribbon's normal: -dir without its component along the tangent */
+    /* the ribbon's normal: -dir without its component along the tangent
+       (lanes x, y, z; lane 3 is not used) */
     along = hairobb__dot3(unit_dir, hit->tangent);
     tlen2 = hairobb__dot3(hit->tangent, hit->tangent);
-    for (k = 0; k < 3; ++k) n[k] = -unit_dir[k] + (tlen2 > 0.0f ? along * hit->tangent[k] / tlen2 : 0.0f);
+    neg_dir = hairobb__v4_set3(-unit_dir[0], -unit_dir[1], -unit_dir[2]);
+    n4 = hairobb__v4_add(neg_dir, tlen2 > 0.0f ? hairobb__v4_div(hairobb__v4_mul(hairobb__v4_set1(along), tangent), hairobb__v4_set1(tlen2))
+                                               : hairobb__v4_set1(0.0f));
+    hairobb__v4_store(n, n4);
     nlen = sqrtf(hairobb__dot3(n, n));
-    for (k = 0; k < 3; ++k) hit->Ng[k] = nlen > 0.0f ? n[k] / nlen : -unit_dir[k];
+    hairobb__v4_store(n, nlen > 0.0f ? hairobb__v4_div(n4, hairobb__v4_set1(nlen)) : neg_dir);
+    memcpy(hit->Ng, n, sizeof hit->Ng);
     hit->t = t;
     hit->u = u;
     hit->prim_id = prim;
@@ -3656,6 +3667,7 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__intersect_rotated_node hairobb__intersect_rotated_node_avx2
 #define hairobb__intersect_segment hairobb__intersect_segment_avx2
 #define hairobb__joint_at hairobb__joint_at_avx2
+#define hairobb__piece_ends hairobb__piece_ends_avx2
 #define hairobb__piece_hit hairobb__piece_hit_avx2
 #define hairobb__ray_points_v4 hairobb__ray_points_v4_avx2
 #define hairobb__ray_row_v4 hairobb__ray_row_v4_avx2
@@ -3683,6 +3695,7 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__v4_min hairobb__v4_min_avx2
 #define hairobb__v4_mul hairobb__v4_mul_avx2
 #define hairobb__v4_set1 hairobb__v4_set1_avx2
+#define hairobb__v4_set3 hairobb__v4_set3_avx2
 #define hairobb__v4_store hairobb__v4_store_avx2
 #define hairobb__v4_sub hairobb__v4_sub_avx2
 #define hairobb__v4_transpose hairobb__v4_transpose_avx2
