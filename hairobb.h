@@ -2548,6 +2548,11 @@ typedef struct hairobb__slab_ray {
     int near_plane[3], far_plane[3];
 } hairobb__slab_ray;
 
+/* A segment's control points in ray space: x, y across the ray, z along it. */
+typedef struct hairobb__ray_curve {
+    float x[4], y[4], z[4], r[4];
+} hairobb__ray_curve;
+
 /* Everything one ray needs, computed once per ray. */
 typedef struct hairobb__ray_state {
     hairobb_filter_fn hit_filter;
@@ -2561,6 +2566,7 @@ typedef struct hairobb__ray_state {
     float dir_length, inv_dir_length;
     uint32_t hit_prim;
     float hit_u;
+    hairobb__ray_curve hit_curve;   /* hit_prim in ray space (intersect1): for its attributes */
     /* secondary rays: hits before skip_t on the segment left and on those
        joined to its ends (positions of its first and last control point)
        are ignored; skip_t = 0 for other rays */
@@ -2611,11 +2617,6 @@ static int hairobb__ray_setup(hairobb__ray_state *rs, const hairobb_bvh *bvh, co
     hairobb__frame_from_direction(unit, rs->frame);
     return 1;
 }
-
-/* A segment's control points in ray space: x, y across the ray, z along it. */
-typedef struct hairobb__ray_curve {
-    float x[4], y[4], z[4], r[4];
-} hairobb__ray_curve;
 
 /* The same curve in power form, a[0] + a[1] u + a[2] u^2 + a[3] u^3: the
    root finder evaluates it many times, Horner's rule makes that cheap.
@@ -3124,22 +3125,29 @@ static void hairobb__to_power_form(const hairobb__ray_curve *c, hairobb__ray_pol
     hairobb__v4_store(p->d[2], hairobb__v4_mul(hairobb__v4_set1(6.0f), a3));
 }
 
-/* Coordinate k (0: x, 1: y) at u, with its first two derivatives. */
-static float hairobb__horner(const hairobb__ray_poly *p, int k, float u, float *d1, float *d2)
+/* x, y, z, r at u (all lanes u) in one 4-wide Horner evaluation, and
+   (where asked) their first two derivatives. */
+HAIROBB__INLINE hairobb__v4 hairobb__horner(const hairobb__ray_poly *p, hairobb__v4 u, hairobb__v4 *d1, hairobb__v4 *d2)
 {
-    *d1 = (p->d[1][k] * u + p->d[0][k]) * u + p->a[1][k];
-    *d2 = p->d[2][k] * u + p->d[0][k];
-    return ((p->a[3][k] * u + p->a[2][k]) * u + p->a[1][k]) * u + p->a[0][k];
+    if (d1) *d1 = hairobb__v4_add(hairobb__v4_mul(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_load(p->d[1]), u), hairobb__v4_load(p->d[0])), u),
+                                  hairobb__v4_load(p->a[1]));
+    if (d2) *d2 = hairobb__v4_add(hairobb__v4_mul(hairobb__v4_load(p->d[2]), u), hairobb__v4_load(p->d[0]));
+    return hairobb__v4_add(hairobb__v4_mul(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_add(hairobb__v4_mul(
+        hairobb__v4_load(p->a[3]), u), hairobb__v4_load(p->a[2])), u), hairobb__v4_load(p->a[1])), u), hairobb__v4_load(p->a[0]));
 }
 
 /* f(u) = dot(P2, P2') vanishes where the ribbon faces the ray; f'(u) too. */
 static float hairobb__ribbon_f(const hairobb__ray_poly *c, float u, float *derivative)
 {
-    float dx, dy, ddx, ddy;
-    float x = hairobb__horner(c, 0, u, &dx, &ddx);
-    float y = hairobb__horner(c, 1, u, &dy, &ddy);
-    if (derivative) *derivative = dx * dx + dy * dy + x * ddx + y * ddy;
-    return x * dx + y * dy;
+    hairobb__v4 d1, d2, value = hairobb__horner(c, hairobb__v4_set1(u), &d1, &d2);
+    float products[4], squares[4], second[4];
+    hairobb__v4_store(products, hairobb__v4_mul(value, d1));
+    if (derivative) {
+        hairobb__v4_store(squares, hairobb__v4_mul(d1, d1));
+        hairobb__v4_store(second, hairobb__v4_mul(value, d2));
+        *derivative = squares[0] + squares[1] + second[0] + second[1];
+    }
+    return products[0] + products[1];
 }
 
 /* Records the hit if the ribbon point (x, y) covers the ray axis within
@@ -3166,13 +3174,10 @@ static int hairobb__accept(hairobb__ray_state *rs, uint32_t prim, float u, float
     return 1;
 }
 
-/* x, y, z, r at u in one 4-wide Horner evaluation. */
 static int hairobb__try_hit(hairobb__ray_state *rs, const hairobb__ray_poly *c, uint32_t prim, float u)
 {
-    hairobb__v4 w = hairobb__v4_set1(u);
     float at[4];
-    hairobb__v4_store(at, hairobb__v4_add(hairobb__v4_mul(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_add(hairobb__v4_mul(
-        hairobb__v4_load(c->a[3]), w), hairobb__v4_load(c->a[2])), w), hairobb__v4_load(c->a[1])), w), hairobb__v4_load(c->a[0])));
+    hairobb__v4_store(at, hairobb__horner(c, hairobb__v4_set1(u), NULL, NULL));
     return hairobb__accept(rs, prim, u, at[2] * rs->inv_dir_length, at[0], at[1], hairobb__maxf(at[3], 0.0f));
 }
 
@@ -3484,7 +3489,9 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
     hairobb__v4_store(c.z, z);
     hairobb__v4_store(c.r, r);
     HAIROBB__COUNT(segment_passed);
-    return hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit);
+    if (!hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit)) return 0;
+    if (!any_hit) rs->hit_curve = c;   /* the nearest hit so far is on this segment */
+    return 1;
 }
 
 /* The segment a secondary ray leaves, or one joined to its ends. */
@@ -3537,24 +3544,21 @@ HAIROBB__INLINE void hairobb__bezier_v4(hairobb__v4 p0, hairobb__v4 p1, hairobb_
                              hairobb__v4_mul(hairobb__v4_set1(u * u * u), p3));
 }
 
-/* Hit attributes of the hit at u, t on segment prim: computed once for the
-   final hit, and for each one a hit filter is shown. */
-static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint32_t prim, float u, float t,
-                            hairobb_hit *hit)
+/* Hit attributes of the hit at u, t on segment prim, c in ray space:
+   computed once for the final hit, and for each one a hit filter is shown. */
+static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint32_t prim, const hairobb__ray_curve *c,
+                            float u, float t, hairobb_hit *hit)
 {
     const float *cp = bvh->vertices + 4 * (size_t)bvh->indices[prim];
-    hairobb__v4 qx, qy, qz, x4, y4, z4, r4, value, d1, tangent, neg_dir, n4;
+    hairobb__v4 x4 = hairobb__v4_load(c->x), y4 = hairobb__v4_load(c->y), z4 = hairobb__v4_set1(0.0f), r4 = hairobb__v4_load(c->r);
+    hairobb__v4 value, d1, tangent, neg_dir, n4;
     float at[4], tangent_at[4], tangent_xy[2], x, y, r, tlen2, along, n[4], nlen;
     const float *unit_dir = rs->frame + 6;
     hairobb__bezier_v4(hairobb__v4_load(cp), hairobb__v4_load(cp + 4), hairobb__v4_load(cp + 8), hairobb__v4_load(cp + 12),
                        u, &value, &tangent);
     hairobb__v4_store(tangent_at, tangent);
     memcpy(hit->tangent, tangent_at, sizeof hit->tangent);
-    hairobb__ray_points_v4(rs, cp, &qx, &qy, &qz, &r4);
-    x4 = hairobb__ray_row_v4(rs, 0, qx, qy, qz);
-    y4 = hairobb__ray_row_v4(rs, 1, qx, qy, qz);
-    z4 = hairobb__v4_set1(0.0f);                   /* z is not needed */
-    hairobb__v4_transpose(&x4, &y4, &z4, &r4);     /* rows: control points (x, y, 0, r) */
+    hairobb__v4_transpose(&x4, &y4, &z4, &r4);     /* rows: control points (x, y, 0, r): z is not needed */
     hairobb__bezier_v4(x4, y4, z4, r4, u, &value, &d1);
     hairobb__v4_store(at, value);
     hairobb__v4_store(tangent_at, d1);
@@ -3582,10 +3586,19 @@ static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs
     hit->prim_id = prim;
 }
 
+/* The segment is moved to ray space again: the intersector's copy is not
+   at hand in hairobb__accept. */
 static int hairobb__hit_filtered_out(const hairobb__ray_state *rs, uint32_t prim, float u, float t)
 {
     hairobb_hit hit;
-    hairobb__hit_at(rs->bvh, rs, prim, u, t, &hit);
+    hairobb__ray_curve c;
+    hairobb__v4 qx, qy, qz, r;
+    hairobb__ray_points_v4(rs, rs->bvh->vertices + 4 * (size_t)rs->bvh->indices[prim], &qx, &qy, &qz, &r);
+    hairobb__v4_store(c.x, hairobb__ray_row_v4(rs, 0, qx, qy, qz));
+    hairobb__v4_store(c.y, hairobb__ray_row_v4(rs, 1, qx, qy, qz));
+    hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));
+    hairobb__v4_store(c.r, r);
+    hairobb__hit_at(rs->bvh, rs, prim, &c, u, t, &hit);
     return !rs->hit_filter(rs->bvh->hit_filter_user, rs->ray, &hit);
 }
 
@@ -3614,7 +3627,7 @@ HAIROBB_DEF int hairobb_intersect1_from(const hairobb_bvh *bvh, const hairobb_hi
     hit->prim_id = HAIROBB_INVALID_ID;
     if (!bvh || !ray || !hairobb__ray_setup_from(&rs, bvh, from, ray)) return 0;
     if (!hairobb__trace(bvh, &rs, 0)) return 0;
-    hairobb__hit_at(bvh, &rs, rs.hit_prim, rs.hit_u, rs.tfar, hit);
+    hairobb__hit_at(bvh, &rs, rs.hit_prim, &rs.hit_curve, rs.hit_u, rs.tfar, hit);
     return 1;
 }
 
