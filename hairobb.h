@@ -871,50 +871,165 @@ static void hairobb__to_bezier(hairobb_basis basis, const float *p, const float 
     for (c = 3; c < 16; c += 4) b[c] = hairobb__maxf(b[c], 0.0f);
 }
 
+/* The bin (of HAIROBB__BINS) of coordinate x for binning from origin. */
+static int hairobb__bin_of(float x, float origin, float scale)
+{
+    float position = (x - origin) * scale;
+    /* clamped before the conversion: a float out of int's range (or NaN)
+       converted to int is undefined */
+    if (!(position >= 1.0f)) return 0;
+    return position >= (float)(HAIROBB__BINS - 1) ? HAIROBB__BINS - 1 : (int)position;
+}
+
+/* Four float lanes for the builder's boxes (x, y, z and one unused): SSE,
+   or a plain C twin computing each lane with the same operations, so both
+   build the same tree. */
+#if HAIROBB__SSE
+typedef __m128 hairobb__b4;
+HAIROBB__INLINE hairobb__b4 hairobb__b4_set1(float x) { return _mm_set1_ps(x); }
+HAIROBB__INLINE hairobb__b4 hairobb__b4_set3(const float p[3]) { return _mm_setr_ps(p[0], p[1], p[2], 0.0f); }
+HAIROBB__INLINE hairobb__b4 hairobb__b4_load4(const float *p) { return _mm_loadu_ps(p); }
+/* a box's upper corner, box[3..5], without reading past box[5] */
+HAIROBB__INLINE hairobb__b4 hairobb__b4_load_upper(const float *box)
+{
+    __m128 v = _mm_loadu_ps(box + 2);
+    return _mm_shuffle_ps(v, v, _MM_SHUFFLE(3, 3, 2, 1));
+}
+HAIROBB__INLINE hairobb__b4 hairobb__b4_add(hairobb__b4 a, hairobb__b4 b) { return _mm_add_ps(a, b); }
+HAIROBB__INLINE hairobb__b4 hairobb__b4_sub(hairobb__b4 a, hairobb__b4 b) { return _mm_sub_ps(a, b); }
+HAIROBB__INLINE hairobb__b4 hairobb__b4_mul(hairobb__b4 a, hairobb__b4 b) { return _mm_mul_ps(a, b); }
+/* a < b ? a : b and a > b ? a : b per lane, as hairobb__minf/maxf */
+HAIROBB__INLINE hairobb__b4 hairobb__b4_min(hairobb__b4 a, hairobb__b4 b) { return _mm_min_ps(a, b); }
+HAIROBB__INLINE hairobb__b4 hairobb__b4_max(hairobb__b4 a, hairobb__b4 b) { return _mm_max_ps(a, b); }
+HAIROBB__INLINE void hairobb__b4_store3(float *p, hairobb__b4 v)
+{
+    _mm_storel_pi(HAIROBB__CAST(__m64 *, HAIROBB__CAST(void *, p)), v);
+    _mm_store_ss(p + 2, _mm_movehl_ps(v, v));
+}
+HAIROBB__INLINE float hairobb__b4_lane(hairobb__b4 v, int k)
+{
+    float f[4];
+    _mm_storeu_ps(f, v);
+    return f[k];
+}
+/* hairobb__half_area of the box's lanes 0-2: (dx dy + dy dz) + dz dx */
+HAIROBB__INLINE float hairobb__b4_half_area(hairobb__b4 lower, hairobb__b4 upper)
+{
+    __m128 d = _mm_sub_ps(upper, lower), p = _mm_mul_ps(d, _mm_shuffle_ps(d, d, _MM_SHUFFLE(3, 0, 2, 1)));
+    return _mm_cvtss_f32(_mm_add_ss(_mm_add_ss(p, _mm_shuffle_ps(p, p, _MM_SHUFFLE(1, 1, 1, 1))),
+                                    _mm_shuffle_ps(p, p, _MM_SHUFFLE(2, 2, 2, 2))));
+}
+/* hairobb__bin_of of lanes 0-2 (position = (x - origin) * scale given) */
+HAIROBB__INLINE void hairobb__b4_bins(hairobb__b4 position, int bin[4])
+{
+    __m128 in = _mm_cmpge_ps(position, _mm_set1_ps(1.0f));     /* false for NaN */
+    __m128 clamped = _mm_and_ps(in, _mm_min_ps(position, _mm_set1_ps((float)(HAIROBB__BINS - 1))));
+    _mm_storeu_si128(HAIROBB__CAST(__m128i *, HAIROBB__CAST(void *, bin)), _mm_cvttps_epi32(clamped));
+}
+#else
+typedef struct hairobb__b4 { float v[4]; } hairobb__b4;
+HAIROBB__INLINE hairobb__b4 hairobb__b4_set1(float x) { hairobb__b4 r; r.v[0] = r.v[1] = r.v[2] = r.v[3] = x; return r; }
+HAIROBB__INLINE hairobb__b4 hairobb__b4_set3(const float p[3]) { hairobb__b4 r; r.v[0] = p[0]; r.v[1] = p[1]; r.v[2] = p[2]; r.v[3] = 0.0f; return r; }
+HAIROBB__INLINE hairobb__b4 hairobb__b4_load4(const float *p) { hairobb__b4 r; memcpy(r.v, p, sizeof r.v); return r; }
+HAIROBB__INLINE hairobb__b4 hairobb__b4_load_upper(const float *box)
+{
+    hairobb__b4 r;
+    r.v[0] = box[3]; r.v[1] = box[4]; r.v[2] = box[5]; r.v[3] = box[5];
+    return r;
+}
+#define HAIROBB__B4_LANES(name, expr) \
+    HAIROBB__INLINE hairobb__b4 name(hairobb__b4 a, hairobb__b4 b) \
+    { hairobb__b4 r; int k; for (k = 0; k < 4; ++k) r.v[k] = expr; return r; }
+HAIROBB__B4_LANES(hairobb__b4_add, a.v[k] + b.v[k])
+HAIROBB__B4_LANES(hairobb__b4_sub, a.v[k] - b.v[k])
+HAIROBB__B4_LANES(hairobb__b4_mul, a.v[k] * b.v[k])
+HAIROBB__B4_LANES(hairobb__b4_min, hairobb__minf(a.v[k], b.v[k]))
+HAIROBB__B4_LANES(hairobb__b4_max, hairobb__maxf(a.v[k], b.v[k]))
+#undef HAIROBB__B4_LANES
+HAIROBB__INLINE void hairobb__b4_store3(float *p, hairobb__b4 v) { memcpy(p, v.v, 3 * sizeof(float)); }
+HAIROBB__INLINE float hairobb__b4_lane(hairobb__b4 v, int k) { return v.v[k]; }
+HAIROBB__INLINE float hairobb__b4_half_area(hairobb__b4 lower, hairobb__b4 upper)
+{
+    return hairobb__half_area(lower.v, upper.v);
+}
+HAIROBB__INLINE void hairobb__b4_bins(hairobb__b4 position, int bin[4])
+{
+    int k;
+    for (k = 0; k < 3; ++k) bin[k] = hairobb__bin_of(position.v[k], 0.0f, 1.0f);
+    bin[3] = 0;
+}
+#endif
+
+/* A frame ready for many hairobb__segment_box calls: its columns (lane k =
+   row k), so that a control point is rotated with three splats. */
+typedef struct hairobb__frame_prep {
+    hairobb__b4 col[3];
+} hairobb__frame_prep;
+
+static void hairobb__prepare_frame(const float frame[9], hairobb__frame_prep *p)
+{
+    int c;
+    for (c = 0; c < 3; ++c) {
+        float column[3];
+        column[0] = frame[c]; column[1] = frame[3 + c]; column[2] = frame[6 + c];
+        p->col[c] = hairobb__b4_set3(column);
+    }
+}
+
+/* Control point p (x, y, z in lanes 0-2) in the frame: lane k =
+   (frame[3k] x + frame[3k+1] y) + frame[3k+2] z. */
+HAIROBB__INLINE hairobb__b4 hairobb__rotate_point(const hairobb__frame_prep *f, hairobb__b4 p)
+{
+#if HAIROBB__SSE
+    return _mm_add_ps(_mm_add_ps(_mm_mul_ps(f->col[0], _mm_shuffle_ps(p, p, _MM_SHUFFLE(0, 0, 0, 0))),
+                                 _mm_mul_ps(f->col[1], _mm_shuffle_ps(p, p, _MM_SHUFFLE(1, 1, 1, 1)))),
+                      _mm_mul_ps(f->col[2], _mm_shuffle_ps(p, p, _MM_SHUFFLE(2, 2, 2, 2))));
+#else
+    return hairobb__b4_add(hairobb__b4_add(hairobb__b4_mul(f->col[0], hairobb__b4_set1(p.v[0])),
+                                           hairobb__b4_mul(f->col[1], hairobb__b4_set1(p.v[1]))),
+                           hairobb__b4_mul(f->col[2], hairobb__b4_set1(p.v[2])));
+#endif
+}
+
 /* Box of a segment in a rotated frame (rows of frame are the new axes).
    The ribbon lies in the convex hull of the control points dilated by the
    largest radius (r(u) is a convex combination of the 4 radii), so the box of
    the rotated control points grown by that radius bounds it. centre, if
    given, is subtracted first; row_norms, if given, scale the radius along
    each row of a frame that is not orthonormal (a quantised one). Node boxes
-   are padded for rounding once, when stored (hairobb__pad_box). */
+   are padded for rounding once, when stored (hairobb__pad_box). Lanes 0-2
+   of *lower and *upper; subtracting a zero centre and scaling by unit
+   norms change no bit. */
+HAIROBB__INLINE void hairobb__segment_box_v4(const float *cp, const hairobb__frame_prep *f, const float *centre,
+                                             const float *row_norms, hairobb__b4 *lower, hairobb__b4 *upper)
+{
+    static const float zero[3] = {0.0f, 0.0f, 0.0f}, one[3] = {1.0f, 1.0f, 1.0f};
+    float radius = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
+    hairobb__b4 c = hairobb__b4_set3(centre ? centre : zero);
+    hairobb__b4 r = hairobb__b4_mul(hairobb__b4_set1(radius), hairobb__b4_set3(row_norms ? row_norms : one));
+    hairobb__b4 v0 = hairobb__rotate_point(f, hairobb__b4_sub(hairobb__b4_load4(cp), c));
+    hairobb__b4 v1 = hairobb__rotate_point(f, hairobb__b4_sub(hairobb__b4_load4(cp + 4), c));
+    hairobb__b4 v2 = hairobb__rotate_point(f, hairobb__b4_sub(hairobb__b4_load4(cp + 8), c));
+    hairobb__b4 v3 = hairobb__rotate_point(f, hairobb__b4_sub(hairobb__b4_load4(cp + 12), c));
+    *lower = hairobb__b4_sub(hairobb__b4_min(hairobb__b4_min(v0, v1), hairobb__b4_min(v2, v3)), r);
+    *upper = hairobb__b4_add(hairobb__b4_max(hairobb__b4_max(v0, v1), hairobb__b4_max(v2, v3)), r);
+}
+
+HAIROBB__INLINE void hairobb__segment_box_prep(const float *cp, const hairobb__frame_prep *f, const float *centre,
+                                               const float *row_norms, float lower[3], float upper[3])
+{
+    hairobb__b4 lo, hi;
+    hairobb__segment_box_v4(cp, f, centre, row_norms, &lo, &hi);
+    hairobb__b4_store3(lower, lo);
+    hairobb__b4_store3(upper, hi);
+}
+
 static void hairobb__segment_box(const float *cp, const float frame[9], const float *centre, const float *row_norms,
                                  float lower[3], float upper[3])
 {
-    float radius = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
-    int k;
-#if HAIROBB__SSE
-    /* lanes = the 4 control points; the same products and sums as below */
-    __m128 x = _mm_setr_ps(cp[0], cp[4], cp[8], cp[12]), y = _mm_setr_ps(cp[1], cp[5], cp[9], cp[13]);
-    __m128 z = _mm_setr_ps(cp[2], cp[6], cp[10], cp[14]);
-    if (centre) {
-        x = _mm_sub_ps(x, _mm_set1_ps(centre[0]));
-        y = _mm_sub_ps(y, _mm_set1_ps(centre[1]));
-        z = _mm_sub_ps(z, _mm_set1_ps(centre[2]));
-    }
-    for (k = 0; k < 3; ++k) {
-        __m128 v = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(frame[3 * k]), x), _mm_mul_ps(_mm_set1_ps(frame[3 * k + 1]), y)),
-                              _mm_mul_ps(_mm_set1_ps(frame[3 * k + 2]), z));
-        __m128 swapped = _mm_shuffle_ps(v, v, _MM_SHUFFLE(2, 3, 0, 1));
-        __m128 lo = _mm_min_ps(v, swapped), hi = _mm_max_ps(v, swapped);
-        lo = _mm_min_ps(lo, _mm_shuffle_ps(lo, lo, _MM_SHUFFLE(1, 0, 3, 2)));
-        hi = _mm_max_ps(hi, _mm_shuffle_ps(hi, hi, _MM_SHUFFLE(1, 0, 3, 2)));
-        lower[k] = _mm_cvtss_f32(lo) - (row_norms ? radius * row_norms[k] : radius);
-        upper[k] = _mm_cvtss_f32(hi) + (row_norms ? radius * row_norms[k] : radius);
-    }
-#else
-    float p[4][3], c[3];
-    int i;
-    c[0] = centre ? centre[0] : 0.0f; c[1] = centre ? centre[1] : 0.0f; c[2] = centre ? centre[2] : 0.0f;
-    for (i = 0; i < 4; ++i)
-        for (k = 0; k < 3; ++k) p[i][k] = centre ? cp[4 * i + k] - c[k] : cp[4 * i + k];
-    for (k = 0; k < 3; ++k) {
-        float v[4];
-        for (i = 0; i < 4; ++i) v[i] = frame[3 * k] * p[i][0] + frame[3 * k + 1] * p[i][1] + frame[3 * k + 2] * p[i][2];
-        lower[k] = hairobb__minf(hairobb__minf(v[0], v[1]), hairobb__minf(v[2], v[3])) - (row_norms ? radius * row_norms[k] : radius);
-        upper[k] = hairobb__maxf(hairobb__maxf(v[0], v[1]), hairobb__maxf(v[2], v[3])) + (row_norms ? radius * row_norms[k] : radius);
-    }
-#endif
+    hairobb__frame_prep f;
+    hairobb__prepare_frame(frame, &f);
+    hairobb__segment_box_prep(cp, &f, centre, row_norms, lower, upper);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -1265,7 +1380,7 @@ static const float *hairobb__ref_points(const hairobb__builder *b, size_t i, flo
     return scratch;
 }
 
-static void hairobb__prim_box(const hairobb__builder *b, size_t i, const float *frame,
+static void hairobb__prim_box(const hairobb__builder *b, size_t i, const hairobb__frame_prep *frame,
                               float lower[3], float upper[3])
 {
     if (!frame) {
@@ -1273,7 +1388,7 @@ static void hairobb__prim_box(const hairobb__builder *b, size_t i, const float *
         memcpy(upper, b->world_boxes + 6 * i + 3, 3 * sizeof(float));
     } else {
         float scratch[16];
-        hairobb__segment_box(hairobb__ref_points(b, i, scratch), frame, NULL, NULL, lower, upper);
+        hairobb__segment_box_prep(hairobb__ref_points(b, i, scratch), frame, NULL, NULL, lower, upper);
     }
 }
 
@@ -1307,9 +1422,11 @@ static float hairobb__sampled_area(const hairobb__builder *b, const hairobb__ran
 {
     size_t step = count > HAIROBB__SAMPLE ? count / HAIROBB__SAMPLE : 1, k;
     float area = 0.0f;
+    hairobb__frame_prep prep;
+    if (frame) hairobb__prepare_frame(frame, &prep);
     for (k = 0; k < count && area < limit; k += step) {
         float lower[3], upper[3];
-        hairobb__prim_box(b, hairobb__position_at(ranges, k), frame, lower, upper);
+        hairobb__prim_box(b, hairobb__position_at(ranges, k), frame ? &prep : NULL, lower, upper);
         area += hairobb__half_area(lower, upper);
     }
     return area;
@@ -1359,14 +1476,6 @@ typedef struct hairobb__split {
     float parent_area;          /* world box of the range being split */
 } hairobb__split;
 
-static int hairobb__bin_of(float x, float origin, float scale)
-{
-    float position = (x - origin) * scale;
-    /* clamped before the conversion: a float out of int's range (or NaN)
-       converted to int is undefined */
-    if (!(position >= 1.0f)) return 0;
-    return position >= (float)(HAIROBB__BINS - 1) ? HAIROBB__BINS - 1 : (int)position;
-}
 
 /* Bins per unit of an extent, just under bins / extent so that the upper
    end falls in the last bin; 0 (do not bin) for extents so small that the
@@ -1383,6 +1492,23 @@ static void hairobb__box_at(const hairobb__builder *b, const float *frame, size_
     const float *box = frame ? b->frame_boxes + 6 * i : b->world_boxes + 6 * i;
     memcpy(lower, box, 3 * sizeof(float));
     memcpy(upper, box + 3, 3 * sizeof(float));
+}
+
+/* The plane after bin `bin` of a sweep is the best split so far. */
+static void hairobb__take_split(hairobb__split *best, float cost, int kind, const float *frame, int axis, float origin,
+                                float scale, int bin, float left_area, float right_area)
+{
+    best->cost = cost;
+    best->kind = kind;
+    best->hair_space = frame != NULL;
+    best->heuristic = (frame ? HAIROBB__TRY_HAIR_SPACE : 0u) | (kind == HAIROBB__SPLIT_SPATIAL ? HAIROBB__TRY_SPATIAL : 0u);
+    if (frame) memcpy(best->frame, frame, sizeof best->frame);
+    best->axis = axis;
+    best->bin_origin = origin;
+    best->bin_scale = scale;
+    best->last_left_bin = bin;
+    best->area_left = left_area;
+    best->area_right = right_area;
 }
 
 /* One sweep over binned boxes: counts[bin] enter from the left (entries) and
@@ -1409,19 +1535,39 @@ static void hairobb__sweep_bins(int bins, const float bin_lower[][3], const floa
         if (left_count == 0 || right_count[bin + 1] == 0) continue;
         left_area = hairobb__half_area(lo, hi);
         cost = box_cost + HAIROBB__COST_SEGMENT * (left_area * (float)left_count + right_area[bin + 1] * (float)right_count[bin + 1]);
-        if (cost < best->cost) {
-            best->cost = cost;
-            best->kind = kind;
-            best->hair_space = frame != NULL;
-            best->heuristic = (frame ? HAIROBB__TRY_HAIR_SPACE : 0u) | (kind == HAIROBB__SPLIT_SPATIAL ? HAIROBB__TRY_SPATIAL : 0u);
-            if (frame) memcpy(best->frame, frame, sizeof best->frame);
-            best->axis = axis;
-            best->bin_origin = origin;
-            best->bin_scale = scale;
-            best->last_left_bin = bin;
-            best->area_left = left_area;
-            best->area_right = right_area[bin + 1];
-        }
+        if (cost < best->cost) hairobb__take_split(best, cost, kind, frame, axis, origin, scale, bin, left_area, right_area[bin + 1]);
+    }
+}
+
+/* hairobb__sweep_bins for object bins (entries = exits = count) on boxes
+   in lanes, the same floats in the same order. */
+static void hairobb__sweep_object(int bins, const hairobb__b4 *bin_lower, const hairobb__b4 *bin_upper,
+                                  const size_t *count, float box_cost, const float *frame, int axis, float origin,
+                                  float scale, hairobb__split *best)
+{
+    float right_area[HAIROBB__BINS];
+    size_t right_count[HAIROBB__BINS + 1], left_count = 0;
+    hairobb__b4 lo = hairobb__b4_set1(FLT_MAX), hi = hairobb__b4_set1(-FLT_MAX);
+    int bin;
+    right_count[bins] = 0;
+    for (bin = bins - 1; bin > 0; --bin) {
+        lo = hairobb__b4_min(lo, bin_lower[bin]);
+        hi = hairobb__b4_max(hi, bin_upper[bin]);
+        right_count[bin] = count[bin] + right_count[bin + 1];
+        right_area[bin] = right_count[bin] ? hairobb__b4_half_area(lo, hi) : 0.0f;
+    }
+    lo = hairobb__b4_set1(FLT_MAX);
+    hi = hairobb__b4_set1(-FLT_MAX);
+    for (bin = 0; bin < bins - 1; ++bin) {
+        float cost, left_area;
+        lo = hairobb__b4_min(lo, bin_lower[bin]);
+        hi = hairobb__b4_max(hi, bin_upper[bin]);
+        left_count += count[bin];
+        if (left_count == 0 || right_count[bin + 1] == 0) continue;
+        left_area = hairobb__b4_half_area(lo, hi);
+        cost = box_cost + HAIROBB__COST_SEGMENT * (left_area * (float)left_count + right_area[bin + 1] * (float)right_count[bin + 1]);
+        if (cost < best->cost)
+            hairobb__take_split(best, cost, HAIROBB__SPLIT_OBJECT, frame, axis, origin, scale, bin, left_area, right_area[bin + 1]);
     }
 }
 
@@ -1433,52 +1579,65 @@ static void hairobb__sweep_bins(int bins, const float bin_lower[][3], const floa
 static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *r, const float *frame,
                                float box_cost, size_t spatial_slack, hairobb__split *best)
 {
-    float cmin[3], cmax[3], bmin[3], bmax[3];
+    float bmin[3], bmax[3];
+    const float *boxes = frame ? b->frame_boxes : b->world_boxes;
+    hairobb__b4 cmin = hairobb__b4_set1(FLT_MAX), cmax = hairobb__b4_set1(-FLT_MAX), half = hairobb__b4_set1(0.5f);
+    hairobb__b4 box_min = cmin, box_max = cmax;
+    hairobb__frame_prep prep;
     size_t i;
     /* fewer bins than references only wastes sweeps */
     int axis, bins = r->end - r->begin < HAIROBB__BINS ? (int)(r->end - r->begin) : HAIROBB__BINS;
-    if (frame) {
-        for (i = r->begin; i < r->end; ++i) {
-            float scratch[16];
-            hairobb__segment_box(hairobb__ref_points(b, i, scratch), frame, NULL, NULL, b->frame_boxes + 6 * i, b->frame_boxes + 6 * i + 3);
-        }
-    }
-    hairobb__box_empty(cmin, cmax);
-    hairobb__box_empty(bmin, bmax);
+    if (frame) hairobb__prepare_frame(frame, &prep);
+    /* the boxes (in a frame: computed here, for the binning and for
+       hairobb__partition) and the bounds of their centroids, in one pass */
     for (i = r->begin; i < r->end; ++i) {
-        float lower[3], upper[3], c[3];
-        int k;
-        hairobb__box_at(b, frame, i, lower, upper);
-        for (k = 0; k < 3; ++k) c[k] = 0.5f * (lower[k] + upper[k]);
-        hairobb__box_grow(cmin, cmax, c, c);
-        hairobb__box_grow(bmin, bmax, lower, upper);
+        hairobb__b4 lower, upper, c;
+        if (frame) {
+            float scratch[16];
+            hairobb__segment_box_v4(hairobb__ref_points(b, i, scratch), &prep, NULL, NULL, &lower, &upper);
+            hairobb__b4_store3(b->frame_boxes + 6 * i, lower);
+            hairobb__b4_store3(b->frame_boxes + 6 * i + 3, upper);
+        } else {
+            lower = hairobb__b4_load4(boxes + 6 * i);
+            upper = hairobb__b4_load_upper(boxes + 6 * i);
+        }
+        c = hairobb__b4_mul(half, hairobb__b4_add(lower, upper));
+        cmin = hairobb__b4_min(cmin, c);
+        cmax = hairobb__b4_max(cmax, c);
+        box_min = hairobb__b4_min(box_min, lower);
+        box_max = hairobb__b4_max(box_max, upper);
     }
+    hairobb__b4_store3(bmin, box_min);
+    hairobb__b4_store3(bmax, box_max);
     {
         /* object binning: one pass over the references for all three axes */
-        float bin_lower[3][HAIROBB__BINS][3], bin_upper[3][HAIROBB__BINS][3], scale[3];
+        hairobb__b4 bin_lower[3][HAIROBB__BINS], bin_upper[3][HAIROBB__BINS], scale;
         size_t bin_count[3][HAIROBB__BINS];
+        float scales[3];
         int bin;
         for (axis = 0; axis < 3; ++axis) {
-            scale[axis] = hairobb__bin_scale(bins, cmax[axis] - cmin[axis]);
+            scales[axis] = hairobb__bin_scale(bins, hairobb__b4_lane(cmax, axis) - hairobb__b4_lane(cmin, axis));
             for (bin = 0; bin < bins; ++bin) {
-                hairobb__box_empty(bin_lower[axis][bin], bin_upper[axis][bin]);
+                bin_lower[axis][bin] = hairobb__b4_set1(FLT_MAX);
+                bin_upper[axis][bin] = hairobb__b4_set1(-FLT_MAX);
                 bin_count[axis][bin] = 0;
             }
         }
+        scale = hairobb__b4_set3(scales);
         for (i = r->begin; i < r->end; ++i) {
-            float lower[3], upper[3];
-            hairobb__box_at(b, frame, i, lower, upper);
+            hairobb__b4 lower = hairobb__b4_load4(boxes + 6 * i), upper = hairobb__b4_load_upper(boxes + 6 * i);
+            int at[4];
+            hairobb__b4_bins(hairobb__b4_mul(hairobb__b4_sub(hairobb__b4_mul(half, hairobb__b4_add(lower, upper)), cmin), scale), at);
             for (axis = 0; axis < 3; ++axis) {
-                bin = hairobb__bin_of(0.5f * (lower[axis] + upper[axis]), cmin[axis], scale[axis]);
-                hairobb__box_grow(bin_lower[axis][bin], bin_upper[axis][bin], lower, upper);
-                bin_count[axis][bin]++;
+                bin_lower[axis][at[axis]] = hairobb__b4_min(bin_lower[axis][at[axis]], lower);
+                bin_upper[axis][at[axis]] = hairobb__b4_max(bin_upper[axis][at[axis]], upper);
+                bin_count[axis][at[axis]]++;
             }
         }
         for (axis = 0; axis < 3; ++axis)
-            if (scale[axis] > 0.0f)
-                hairobb__sweep_bins(bins, (const float (*)[3])bin_lower[axis], (const float (*)[3])bin_upper[axis],
-                                    bin_count[axis], bin_count[axis], box_cost, HAIROBB__SPLIT_OBJECT, frame, axis,
-                                    cmin[axis], scale[axis], best);
+            if (scales[axis] > 0.0f)
+                hairobb__sweep_object(bins, bin_lower[axis], bin_upper[axis], bin_count[axis], box_cost, frame, axis,
+                                      hairobb__b4_lane(cmin, axis), scales[axis], best);
     }
     for (axis = 0; axis < 3 && spatial_slack > 0; ++axis) {
         float bin_lower[HAIROBB__BINS][3], bin_upper[HAIROBB__BINS][3];
@@ -1543,7 +1702,8 @@ static int hairobb__cluster_of(const hairobb__builder *b, size_t i, const float 
 static void hairobb__cluster_split(const hairobb__builder *b, const hairobb__range *r, float box_cost, hairobb__split *best)
 {
     size_t count = r->end - r->begin, step = count > HAIROBB__SAMPLE ? count / HAIROBB__SAMPLE : 1, i, n[2] = {0, 0};
-    float direction[2][3], frame[2][9], lower[2][3], upper[2][3], best_dot = 0.9f, cost;
+    float direction[2][3], frame[9], lower[2][3], upper[2][3], best_dot = 0.9f, cost;
+    hairobb__frame_prep prep[2];
     int found = 0, c;
     if (!hairobb__ref_direction(b, r->begin + count / 2, direction[0])) return;
     for (i = r->begin; i < r->end; i += step) {
@@ -1554,13 +1714,14 @@ static void hairobb__cluster_split(const hairobb__builder *b, const hairobb__ran
     }
     if (!found) return;     /* all within ~25 degrees: hair-space binning covers it */
     for (c = 0; c < 2; ++c) {
-        hairobb__frame_from_direction(direction[c], frame[c]);
+        hairobb__frame_from_direction(direction[c], frame);
+        hairobb__prepare_frame(frame, &prep[c]);
         hairobb__box_empty(lower[c], upper[c]);
     }
     for (i = r->begin; i < r->end; ++i) {
         float lo[3], hi[3];
         c = hairobb__cluster_of(b, i, (const float (*)[3])direction);
-        hairobb__prim_box(b, i, frame[c], lo, hi);
+        hairobb__prim_box(b, i, &prep[c], lo, hi);
         hairobb__box_grow(lower[c], upper[c], lo, hi);
         n[c]++;
     }
@@ -1578,16 +1739,12 @@ static void hairobb__cluster_split(const hairobb__builder *b, const hairobb__ran
     }
 }
 
-static void hairobb__range_box(const hairobb__builder *b, size_t begin, size_t end, const float *frame,
-                               float lower[3], float upper[3])
+/* World box of the references at positions [begin, end). */
+static void hairobb__range_box(const hairobb__builder *b, size_t begin, size_t end, float lower[3], float upper[3])
 {
     size_t i;
     hairobb__box_empty(lower, upper);
-    for (i = begin; i < end; ++i) {
-        float lo[3], hi[3];
-        hairobb__prim_box(b, i, frame, lo, hi);
-        hairobb__box_grow(lower, upper, lo, hi);
-    }
+    for (i = begin; i < end; ++i) hairobb__box_grow(lower, upper, b->world_boxes + 6 * i, b->world_boxes + 6 * i + 3);
 }
 
 /* The padded box of the range in frame around centre: what a node stores. */
@@ -1597,12 +1754,14 @@ static void hairobb__node_box(const hairobb__builder *b, const hairobb__range *r
     size_t i;
     float norms[3];
     int k;
+    hairobb__frame_prep prep;
+    hairobb__prepare_frame(frame, &prep);
     for (k = 0; k < 3; ++k)     /* rounded up: the radius must not shrink */
         norms[k] = sqrtf(hairobb__dot3(frame + 3 * k, frame + 3 * k)) * (1.0f + 1.0f / 1048576.0f);
     hairobb__box_empty(lower, upper);
     for (i = r->begin; i < r->end; ++i) {
         float lo[3], hi[3], scratch[16];
-        hairobb__segment_box(hairobb__ref_points(b, i, scratch), frame, centre, norms, lo, hi);
+        hairobb__segment_box_prep(hairobb__ref_points(b, i, scratch), &prep, centre, norms, lo, hi);
         hairobb__box_grow(lower, upper, lo, hi);
     }
     hairobb__pad_box(lower, upper);
@@ -1615,7 +1774,7 @@ static void hairobb__range_centre(const hairobb__builder *b, const hairobb__rang
     int k, i;
     hairobb__box_empty(lower, upper);
     for (i = 0; i < range_count; ++i) {
-        hairobb__range_box(b, ranges[i].begin, ranges[i].end, NULL, lo, hi);
+        hairobb__range_box(b, ranges[i].begin, ranges[i].end, lo, hi);
         hairobb__box_grow(lower, upper, lo, hi);
     }
     for (k = 0; k < 3; ++k) centre[k] = 0.5f * lower[k] + 0.5f * upper[k];
@@ -1631,7 +1790,7 @@ static void hairobb__find_split(const hairobb__builder *b, const hairobb__range 
 {
     float lower[3], upper[3], area;
     size_t slack = (tries & HAIROBB__TRY_SPATIAL) ? r->cap - r->end : 0;
-    hairobb__range_box(b, r->begin, r->end, NULL, lower, upper);
+    hairobb__range_box(b, r->begin, r->end, lower, upper);
     area = hairobb__half_area(lower, upper);
     best->cost = FLT_MAX;
     best->kind = HAIROBB__SPLIT_MEDIAN;
@@ -1657,9 +1816,9 @@ static void hairobb__find_split(const hairobb__builder *b, const hairobb__range 
     if (best->kind == HAIROBB__SPLIT_MEDIAN) {
         size_t half = (r->end - r->begin) / 2;
         best->cost = FLT_MAX;
-        hairobb__range_box(b, r->begin, r->begin + half, NULL, lower, upper);
+        hairobb__range_box(b, r->begin, r->begin + half, lower, upper);
         best->area_left = hairobb__half_area(lower, upper);
-        hairobb__range_box(b, r->begin + half, r->end, NULL, lower, upper);
+        hairobb__range_box(b, r->begin + half, r->end, lower, upper);
         best->area_right = hairobb__half_area(lower, upper);
     }
 }
