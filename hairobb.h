@@ -1353,15 +1353,12 @@ typedef struct hairobb__task {
     int ran;                          /* a user's parallel_for must run each task */
 } hairobb__task;
 
-/* Control points (x, y, z, r each) of the reference at position i: the
-   caller's, or those of its clipped part, computed in double from the
-   blossom of the segment so the float hull still holds the curve. */
-static const float *hairobb__ref_points(const hairobb__builder *b, size_t i, float scratch[16])
+/* Control points (x, y, z, r each) of the part [u0, u1] of a segment cp
+   that spatial splits clipped, computed in double from the blossom of the
+   segment so the float hull still holds the curve. */
+static const float *hairobb__clipped_points(const float *cp, double u0, double u1, float scratch[16])
 {
-    const float *cp = b->vertices + 4 * (size_t)b->indices[b->ids[i]];
-    double u0 = b->ranges[2 * i], u1 = b->ranges[2 * i + 1];
     int point, k;
-    if (u0 == 0.0 && u1 == 1.0) return cp;
     for (point = 0; point < 4; ++point) {
         /* blossom B(t1, t2, t3) with the t's u0 or u1: point 0 = (u0,u0,u0), 3 = (u1,u1,u1) */
         double t[3];
@@ -1378,6 +1375,17 @@ static const float *hairobb__ref_points(const hairobb__builder *b, size_t i, flo
         }
     }
     return scratch;
+}
+
+/* Control points of the reference at position i: the caller's, or its
+   clipped part's. Inline: most references are whole segments, and every
+   box pass asks. */
+HAIROBB__INLINE const float *hairobb__ref_points(const hairobb__builder *b, size_t i, float scratch[16])
+{
+    const float *cp = b->vertices + 4 * (size_t)b->indices[b->ids[i]];
+    float u0 = b->ranges[2 * i], u1 = b->ranges[2 * i + 1];
+    if (u0 == 0.0f && u1 == 1.0f) return cp;
+    return hairobb__clipped_points(cp, u0, u1, scratch);
 }
 
 static void hairobb__prim_box(const hairobb__builder *b, size_t i, const hairobb__frame_prep *frame,
@@ -1575,10 +1583,13 @@ static void hairobb__sweep_object(int bins, const hairobb__b4 *bin_lower, const 
    axes): by centroid (object split) and, with spatial_slack > 0, by
    clipping references at the bin planes (spatial split) when at most
    spatial_slack of them straddle the plane. Costs are SAH costs times the
-   parent's area; box_cost is that of testing the two new child boxes. */
+   parent's area *area: binning in world axes computes it (the half area of
+   the range's world box, as hairobb__range_box gives), in a frame reads it;
+   box_per_area times it is the cost of testing the two new child boxes. */
 static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *r, const float *frame,
-                               float box_cost, size_t spatial_slack, hairobb__split *best)
+                               float box_per_area, float *area, size_t spatial_slack, hairobb__split *best)
 {
+    float box_cost;
     float bmin[3], bmax[3];
     const float *boxes = frame ? b->frame_boxes : b->world_boxes;
     hairobb__b4 cmin = hairobb__b4_set1(FLT_MAX), cmax = hairobb__b4_set1(-FLT_MAX), half = hairobb__b4_set1(0.5f);
@@ -1609,6 +1620,8 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
     }
     hairobb__b4_store3(bmin, box_min);
     hairobb__b4_store3(bmax, box_max);
+    if (!frame) *area = hairobb__half_area(bmin, bmax);
+    box_cost = box_per_area * *area;
     {
         /* object binning: one pass over the references for all three axes */
         hairobb__b4 bin_lower[3][HAIROBB__BINS], bin_upper[3][HAIROBB__BINS], scale;
@@ -1788,18 +1801,19 @@ static int hairobb__at_top(const hairobb__builder *b, size_t count) { return b->
 static void hairobb__find_split(const hairobb__builder *b, const hairobb__range *r, unsigned depth,
                                 unsigned tries, hairobb__split *best)
 {
-    float lower[3], upper[3], area;
+    float lower[3], upper[3], area = 0.0f;
     size_t slack = (tries & HAIROBB__TRY_SPATIAL) ? r->cap - r->end : 0;
-    hairobb__range_box(b, r->begin, r->end, lower, upper);
-    area = hairobb__half_area(lower, upper);
+    int world_binning = depth < HAIROBB__SAH_DEPTH && b->policy != HAIROBB_NODES_OBB_ONLY;
+    if (!world_binning) {   /* else the binning's first pass finds the same box */
+        hairobb__range_box(b, r->begin, r->end, lower, upper);
+        area = hairobb__half_area(lower, upper);
+    }
     best->cost = FLT_MAX;
     best->kind = HAIROBB__SPLIT_MEDIAN;
     best->heuristic = 0;
     best->hair_space = 0;
-    best->parent_area = area;
     if (depth < HAIROBB__SAH_DEPTH) {
-        if (b->policy != HAIROBB_NODES_OBB_ONLY)
-            hairobb__bin_split(b, r, NULL, 2.0f * HAIROBB__COST_AABB * area, slack, best);
+        if (world_binning) hairobb__bin_split(b, r, NULL, 2.0f * HAIROBB__COST_AABB, &area, slack, best);
         /* a mixed tree's top (above the tasks) splits in world space only: hair
            is sorted by place there, and that part of the build is not spread
            over threads (combed, straight.hair: 10% fewer build instructions,
@@ -1808,11 +1822,12 @@ static void hairobb__find_split(const hairobb__builder *b, const hairobb__range 
             (b->policy == HAIROBB_NODES_OBB_ONLY || !hairobb__at_top(b, r->end - r->begin))) {
             float frame[9];
             hairobb__choose_hair_space(b, r, 1, 0, frame);
-            hairobb__bin_split(b, r, frame, 2.0f * HAIROBB__COST_OBB * area, slack, best);
+            hairobb__bin_split(b, r, frame, 2.0f * HAIROBB__COST_OBB, &area, slack, best);
         }
         if (b->policy != HAIROBB_NODES_AABB_ONLY && (tries & HAIROBB__TRY_CLUSTER))
             hairobb__cluster_split(b, r, 2.0f * HAIROBB__COST_OBB * area, best);
     }
+    best->parent_area = area;
     if (best->kind == HAIROBB__SPLIT_MEDIAN) {
         size_t half = (r->end - r->begin) / 2;
         best->cost = FLT_MAX;
@@ -1839,27 +1854,23 @@ static void hairobb__update_tries(hairobb__tries *t, const hairobb__split *split
     }
 }
 
-static void hairobb__copy_position(hairobb__builder *b, size_t to, size_t from)
-{
-    b->ids[to] = b->ids[from];
-    memcpy(b->ranges + 2 * to, b->ranges + 2 * from, 2 * sizeof(float));
-    memcpy(b->world_boxes + 6 * to, b->world_boxes + 6 * from, 6 * sizeof(float));
-}
-
-/* Swaps two references, with their boxes in the frame last binned. */
-static void hairobb__swap_positions(hairobb__builder *b, size_t i, size_t j)
+/* Swaps the references at positions i and j. Boxes in the frame last
+   binned are read only by the partition's test of the position it looks at
+   next: with frame_box, i (looked at next) gets j's; the rest are stale
+   after the partition and are not moved. */
+static void hairobb__swap_positions(hairobb__builder *b, size_t i, size_t j, int frame_box)
 {
     uint32_t id = b->ids[i];
-    float range[2], box[6], frame_box[6];
+    float range[2], box[6];
     memcpy(range, b->ranges + 2 * i, sizeof range);
     memcpy(box, b->world_boxes + 6 * i, sizeof box);
-    memcpy(frame_box, b->frame_boxes + 6 * i, sizeof frame_box);
-    hairobb__copy_position(b, i, j);
-    memcpy(b->frame_boxes + 6 * i, b->frame_boxes + 6 * j, sizeof frame_box);
+    b->ids[i] = b->ids[j];
+    memcpy(b->ranges + 2 * i, b->ranges + 2 * j, sizeof range);
+    memcpy(b->world_boxes + 6 * i, b->world_boxes + 6 * j, sizeof box);
     b->ids[j] = id;
     memcpy(b->ranges + 2 * j, range, sizeof range);
     memcpy(b->world_boxes + 6 * j, box, sizeof box);
-    memcpy(b->frame_boxes + 6 * j, frame_box, sizeof frame_box);
+    if (frame_box) memcpy(b->frame_boxes + 6 * i, b->frame_boxes + 6 * j, sizeof box);
 }
 
 static void hairobb__set_range(hairobb__builder *b, size_t i, float u0, float u1)
@@ -1943,11 +1954,17 @@ static void hairobb__partition(hairobb__builder *b, const hairobb__range *r, con
         lo = mid;
     } else {
         /* three-way: [begin, lo) left, [lo, mid) straddling, [hi, end) right */
+        int frame_box = split->hair_space && split->kind != HAIROBB__SPLIT_CLUSTER;
         while (mid < hi) {
             int side = hairobb__side(b, mid, split);
-            if (side == 0) hairobb__swap_positions(b, lo++, mid++);
-            else if (side == 2) mid++;
-            else hairobb__swap_positions(b, mid, --hi);
+            if (side == 0) {
+                if (lo < mid) hairobb__swap_positions(b, lo, mid, 0);
+                lo++, mid++;
+            } else if (side == 2) {
+                mid++;
+            } else if (mid < --hi) {
+                hairobb__swap_positions(b, mid, hi, frame_box);
+            }
         }
         /* clip the straddling references: the left part stays, the right part
            is appended after the right side */
@@ -1956,7 +1973,7 @@ static void hairobb__partition(hairobb__builder *b, const hairobb__range *r, con
             HAIROBB_ASSERT(end < r->cap);
             side = hairobb__clip(b, i, end, split);
             if (side < 0) continue;                 /* kept whole, on the left */
-            if (side == 1) hairobb__swap_positions(b, i, end);
+            if (side == 1) hairobb__swap_positions(b, i, end, 0);
             ++end;
         }
         lo = mid;
