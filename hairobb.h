@@ -1382,10 +1382,11 @@ static const float *hairobb__clipped_points(const float *cp, double u0, double u
    box pass asks. */
 HAIROBB__INLINE const float *hairobb__ref_points(const hairobb__builder *b, size_t i, float scratch[16])
 {
+    static const float whole[2] = {0.0f, 1.0f};
     const float *cp = b->vertices + 4 * (size_t)b->indices[b->ids[i]];
-    float u0 = b->ranges[2 * i], u1 = b->ranges[2 * i + 1];
-    if (u0 == 0.0f && u1 == 1.0f) return cp;
-    return hairobb__clipped_points(cp, u0, u1, scratch);
+    /* the bits of [0, 1]: u0 is +0 or above (set_range's 0, or a clip strictly inside) */
+    if (memcmp(b->ranges + 2 * i, whole, sizeof whole) == 0) return cp;
+    return hairobb__clipped_points(cp, b->ranges[2 * i], b->ranges[2 * i + 1], scratch);
 }
 
 static void hairobb__prim_box(const hairobb__builder *b, size_t i, const hairobb__frame_prep *frame,
@@ -1413,8 +1414,6 @@ static int hairobb__ref_direction(const hairobb__builder *b, size_t i, float d[3
     return 1;
 }
 
-/* Sum of the surface areas of up to HAIROBB__SAMPLE evenly spaced
-   references of the range in frame (NULL: world), stopping past `limit`. */
 /* The position of the k-th reference of a list of ranges. */
 static size_t hairobb__position_at(const hairobb__range *ranges, size_t k)
 {
@@ -1422,46 +1421,48 @@ static size_t hairobb__position_at(const hairobb__range *ranges, size_t k)
     return ranges->begin + k;
 }
 
-/* Sum of the surface areas of up to HAIROBB__SAMPLE evenly spaced
-   references of the ranges (count references in all) in frame (NULL: world),
-   stopping past `limit`. */
-static float hairobb__sampled_area(const hairobb__builder *b, const hairobb__range *ranges, size_t count,
-                                   const float *frame, float limit)
-{
-    size_t step = count > HAIROBB__SAMPLE ? count / HAIROBB__SAMPLE : 1, k;
-    float area = 0.0f;
-    hairobb__frame_prep prep;
-    if (frame) hairobb__prepare_frame(frame, &prep);
-    for (k = 0; k < count && area < limit; k += step) {
-        float lower[3], upper[3];
-        hairobb__prim_box(b, hairobb__position_at(ranges, k), frame ? &prep : NULL, lower, upper);
-        area += hairobb__half_area(lower, upper);
-    }
-    return area;
-}
-
 /* Picks, among the main directions of evenly spaced references of the
    ranges (and the world axes when allow_identity), the rotation with the
-   smallest summed surface area of the sampled references' boxes. Deterministic. */
+   smallest summed surface area of the boxes of up to HAIROBB__SAMPLE evenly
+   spaced references. Deterministic. Every candidate's sum in one pass over
+   the samples: a sum the first candidates' best would have cut short (its
+   partial sum already at least that best) loses either way, as sums only
+   grow; the world axes' sum stops at FLT_MAX, as its cut-off was. */
 static void hairobb__choose_hair_space(const hairobb__builder *b, const hairobb__range *ranges, int range_count,
                                        int allow_identity, float best_frame[9])
 {
-    size_t count = 0;
-    unsigned c, candidates;
-    float best_area = FLT_MAX;
+    size_t count = 0, step, k;
+    unsigned c, candidates, n = 0;
+    float frames[HAIROBB__MAX_CANDIDATES][9], areas[HAIROBB__MAX_CANDIDATES], world_area = 0.0f, best_area;
+    hairobb__frame_prep preps[HAIROBB__MAX_CANDIDATES];
     int i;
     for (i = 0; i < range_count; ++i) count += ranges[i].end - ranges[i].begin;
     candidates = b->candidates < count ? b->candidates : (unsigned)count;
-    hairobb__identity_frame(best_frame);
-    if (allow_identity) best_area = hairobb__sampled_area(b, ranges, count, NULL, FLT_MAX);
     for (c = 0; c < candidates; ++c) {
-        float frame[9], d[3], area;
+        float d[3];
         size_t pick = hairobb__position_at(ranges, (count * (2 * c + 1)) / (2 * candidates));
         if (!hairobb__ref_direction(b, pick, d)) continue;
-        hairobb__frame_from_direction(d, frame);
-        area = hairobb__sampled_area(b, ranges, count, frame, best_area);
-        if (area < best_area) { best_area = area; memcpy(best_frame, frame, sizeof frame); }
+        hairobb__frame_from_direction(d, frames[n]);
+        hairobb__prepare_frame(frames[n], &preps[n]);
+        areas[n++] = 0.0f;
     }
+    step = count > HAIROBB__SAMPLE ? count / HAIROBB__SAMPLE : 1;
+    for (k = 0; k < count; k += step) {
+        size_t at = hairobb__position_at(ranges, k);
+        float scratch[16];
+        const float *cp = hairobb__ref_points(b, at, scratch);
+        if (allow_identity && world_area < FLT_MAX)
+            world_area += hairobb__half_area(b->world_boxes + 6 * at, b->world_boxes + 6 * at + 3);
+        for (c = 0; c < n; ++c) {
+            hairobb__b4 lower, upper;
+            hairobb__segment_box_v4(cp, &preps[c], NULL, NULL, &lower, &upper);
+            areas[c] += hairobb__b4_half_area(lower, upper);
+        }
+    }
+    hairobb__identity_frame(best_frame);
+    best_area = allow_identity ? world_area : FLT_MAX;
+    for (c = 0; c < n; ++c)
+        if (areas[c] < best_area) { best_area = areas[c]; memcpy(best_frame, frames[c], sizeof frames[c]); }
 }
 
 /* ------------------------------------------------------------------------ */
@@ -1550,18 +1551,18 @@ static void hairobb__sweep_bins(int bins, const float bin_lower[][3], const floa
 /* hairobb__sweep_bins for object bins (entries = exits = count) on boxes
    in lanes, the same floats in the same order. */
 static void hairobb__sweep_object(int bins, const hairobb__b4 *bin_lower, const hairobb__b4 *bin_upper,
-                                  const size_t *count, float box_cost, const float *frame, int axis, float origin,
+                                  const uint32_t (*count)[4], float box_cost, const float *frame, int axis, float origin,
                                   float scale, hairobb__split *best)
 {
     float right_area[HAIROBB__BINS];
-    size_t right_count[HAIROBB__BINS + 1], left_count = 0;
+    uint32_t right_count[HAIROBB__BINS + 1], left_count = 0;   /* converted to float as the size_t counts were */
     hairobb__b4 lo = hairobb__b4_set1(FLT_MAX), hi = hairobb__b4_set1(-FLT_MAX);
     int bin;
     right_count[bins] = 0;
     for (bin = bins - 1; bin > 0; --bin) {
         lo = hairobb__b4_min(lo, bin_lower[bin]);
         hi = hairobb__b4_max(hi, bin_upper[bin]);
-        right_count[bin] = count[bin] + right_count[bin + 1];
+        right_count[bin] = count[bin][axis] + right_count[bin + 1];
         right_area[bin] = right_count[bin] ? hairobb__b4_half_area(lo, hi) : 0.0f;
     }
     lo = hairobb__b4_set1(FLT_MAX);
@@ -1570,7 +1571,7 @@ static void hairobb__sweep_object(int bins, const hairobb__b4 *bin_lower, const 
         float cost, left_area;
         lo = hairobb__b4_min(lo, bin_lower[bin]);
         hi = hairobb__b4_max(hi, bin_upper[bin]);
-        left_count += count[bin];
+        left_count += count[bin][axis];
         if (left_count == 0 || right_count[bin + 1] == 0) continue;
         left_area = hairobb__b4_half_area(lo, hi);
         cost = box_cost + HAIROBB__COST_SEGMENT * (left_area * (float)left_count + right_area[bin + 1] * (float)right_count[bin + 1]);
@@ -1578,6 +1579,80 @@ static void hairobb__sweep_object(int bins, const hairobb__b4 *bin_lower, const 
             hairobb__take_split(best, cost, HAIROBB__SPLIT_OBJECT, frame, axis, origin, scale, bin, left_area, right_area[bin + 1]);
     }
 }
+
+#if HAIROBB__SSE
+/* (dx dy + dy dz) + dz dx of boxes with one axis per vector (lanes: boxes) */
+HAIROBB__INLINE __m128 hairobb__half_areas(const __m128 lower[3], const __m128 upper[3])
+{
+    __m128 dx = _mm_sub_ps(upper[0], lower[0]), dy = _mm_sub_ps(upper[1], lower[1]), dz = _mm_sub_ps(upper[2], lower[2]);
+    return _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dy), _mm_mul_ps(dy, dz)), _mm_mul_ps(dz, dx));
+}
+
+/* The three axes' hairobb__sweep_object at once, lane = axis (bins
+   transposed): the same floats. Each lane keeps its first cheapest plane,
+   then the axes in order beat *best or not, as one sweep after the other
+   would have left it. Counts below 2^31 (int lanes). */
+static void hairobb__sweep_objects(int bins, const hairobb__b4 (*bin_lower)[HAIROBB__BINS],
+                                   const hairobb__b4 (*bin_upper)[HAIROBB__BINS], const uint32_t (*count)[4],
+                                   float box_cost, const float *frame, const float origin[3], const float scale[3],
+                                   hairobb__split *best)
+{
+    __m128 box[HAIROBB__BINS][6], right_area[HAIROBB__BINS], lo[3], hi[3];
+    __m128 best_cost = _mm_set1_ps(INFINITY), best_left = _mm_setzero_ps(), best_right = _mm_setzero_ps();
+    __m128i right_count[HAIROBB__BINS + 1], zero = _mm_setzero_si128(), left_count = zero, best_bin = zero;
+    float costs[4], lefts[4], rights[4];
+    int bin, k, bins_at[4];
+    for (bin = 0; bin < bins; ++bin) {
+        __m128 l0 = bin_lower[0][bin], l1 = bin_lower[1][bin], l2 = bin_lower[2][bin], l3 = l2;
+        __m128 u0 = bin_upper[0][bin], u1 = bin_upper[1][bin], u2 = bin_upper[2][bin], u3 = u2;
+        _MM_TRANSPOSE4_PS(l0, l1, l2, l3);
+        _MM_TRANSPOSE4_PS(u0, u1, u2, u3);
+        box[bin][0] = l0; box[bin][1] = l1; box[bin][2] = l2;
+        box[bin][3] = u0; box[bin][4] = u1; box[bin][5] = u2;
+    }
+    /* written out: gcc -O2 kept a loop over k here */
+#define HAIROBB__GROW_AXES(bin) \
+        lo[0] = _mm_min_ps(lo[0], box[bin][0]); hi[0] = _mm_max_ps(hi[0], box[bin][3]); \
+        lo[1] = _mm_min_ps(lo[1], box[bin][1]); hi[1] = _mm_max_ps(hi[1], box[bin][4]); \
+        lo[2] = _mm_min_ps(lo[2], box[bin][2]); hi[2] = _mm_max_ps(hi[2], box[bin][5]);
+    for (k = 0; k < 3; ++k) { lo[k] = _mm_set1_ps(FLT_MAX); hi[k] = _mm_set1_ps(-FLT_MAX); }
+    right_count[bins] = zero;
+    for (bin = bins - 1; bin > 0; --bin) {
+        __m128i n;
+        HAIROBB__GROW_AXES(bin)
+        n = right_count[bin] = _mm_add_epi32(_mm_loadu_si128(HAIROBB__CAST(const __m128i *, HAIROBB__CAST(const void *, count[bin]))),
+                                             right_count[bin + 1]);
+        right_area[bin] = _mm_andnot_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(n, zero)), hairobb__half_areas(lo, hi));
+    }
+    for (k = 0; k < 3; ++k) { lo[k] = _mm_set1_ps(FLT_MAX); hi[k] = _mm_set1_ps(-FLT_MAX); }
+    for (bin = 0; bin < bins - 1; ++bin) {
+        __m128i n = right_count[bin + 1];
+        __m128 empty, left_area, cost, take;
+        HAIROBB__GROW_AXES(bin)
+        left_count = _mm_add_epi32(left_count, _mm_loadu_si128(HAIROBB__CAST(const __m128i *, HAIROBB__CAST(const void *, count[bin]))));
+        empty = _mm_castsi128_ps(_mm_or_si128(_mm_cmpeq_epi32(left_count, zero), _mm_cmpeq_epi32(n, zero)));
+        left_area = hairobb__half_areas(lo, hi);
+        cost = _mm_add_ps(_mm_set1_ps(box_cost),
+                          _mm_mul_ps(_mm_set1_ps(HAIROBB__COST_SEGMENT),
+                                     _mm_add_ps(_mm_mul_ps(left_area, _mm_cvtepi32_ps(left_count)),
+                                                _mm_mul_ps(right_area[bin + 1], _mm_cvtepi32_ps(n)))));
+        take = _mm_andnot_ps(empty, _mm_cmplt_ps(cost, best_cost));
+        best_cost = _mm_or_ps(_mm_and_ps(take, cost), _mm_andnot_ps(take, best_cost));
+        best_left = _mm_or_ps(_mm_and_ps(take, left_area), _mm_andnot_ps(take, best_left));
+        best_right = _mm_or_ps(_mm_and_ps(take, right_area[bin + 1]), _mm_andnot_ps(take, best_right));
+        best_bin = _mm_or_si128(_mm_and_si128(_mm_castps_si128(take), _mm_set1_epi32(bin)),
+                                _mm_andnot_si128(_mm_castps_si128(take), best_bin));
+    }
+#undef HAIROBB__GROW_AXES
+    _mm_storeu_ps(costs, best_cost);
+    _mm_storeu_ps(lefts, best_left);
+    _mm_storeu_ps(rights, best_right);
+    _mm_storeu_si128(HAIROBB__CAST(__m128i *, HAIROBB__CAST(void *, bins_at)), best_bin);
+    for (k = 0; k < 3; ++k)
+        if (scale[k] > 0.0f && costs[k] < best->cost)
+            hairobb__take_split(best, costs[k], HAIROBB__SPLIT_OBJECT, frame, k, origin[k], scale[k], bins_at[k], lefts[k], rights[k]);
+}
+#endif
 
 /* Best SAH split of the range binned along the axes of frame (NULL = world
    axes): by centroid (object split) and, with spatial_slack > 0, by
@@ -1625,15 +1700,16 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
     {
         /* object binning: one pass over the references for all three axes */
         hairobb__b4 bin_lower[3][HAIROBB__BINS], bin_upper[3][HAIROBB__BINS], scale;
-        size_t bin_count[3][HAIROBB__BINS];
-        float scales[3];
+        uint32_t bin_count[HAIROBB__BINS][4];   /* [bin][axis]; a range holds at most 2^32-1 references */
+        float scales[3], origins[3];
         int bin;
+        memset(bin_count, 0, (size_t)bins * sizeof bin_count[0]);
         for (axis = 0; axis < 3; ++axis) {
-            scales[axis] = hairobb__bin_scale(bins, hairobb__b4_lane(cmax, axis) - hairobb__b4_lane(cmin, axis));
+            origins[axis] = hairobb__b4_lane(cmin, axis);
+            scales[axis] = hairobb__bin_scale(bins, hairobb__b4_lane(cmax, axis) - origins[axis]);
             for (bin = 0; bin < bins; ++bin) {
                 bin_lower[axis][bin] = hairobb__b4_set1(FLT_MAX);
                 bin_upper[axis][bin] = hairobb__b4_set1(-FLT_MAX);
-                bin_count[axis][bin] = 0;
             }
         }
         scale = hairobb__b4_set3(scales);
@@ -1641,16 +1717,28 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
             hairobb__b4 lower = hairobb__b4_load4(boxes + 6 * i), upper = hairobb__b4_load_upper(boxes + 6 * i);
             int at[4];
             hairobb__b4_bins(hairobb__b4_mul(hairobb__b4_sub(hairobb__b4_mul(half, hairobb__b4_add(lower, upper)), cmin), scale), at);
-            for (axis = 0; axis < 3; ++axis) {
-                bin_lower[axis][at[axis]] = hairobb__b4_min(bin_lower[axis][at[axis]], lower);
-                bin_upper[axis][at[axis]] = hairobb__b4_max(bin_upper[axis][at[axis]], upper);
-                bin_count[axis][at[axis]]++;
-            }
+#define HAIROBB__BIN_INTO(axis) \
+            bin_lower[axis][at[axis]] = hairobb__b4_min(bin_lower[axis][at[axis]], lower); \
+            bin_upper[axis][at[axis]] = hairobb__b4_max(bin_upper[axis][at[axis]], upper); \
+            bin_count[at[axis]][axis]++;
+            HAIROBB__BIN_INTO(0)
+            HAIROBB__BIN_INTO(1)
+            HAIROBB__BIN_INTO(2)
+#undef HAIROBB__BIN_INTO
         }
-        for (axis = 0; axis < 3; ++axis)
-            if (scales[axis] > 0.0f)
-                hairobb__sweep_object(bins, bin_lower[axis], bin_upper[axis], bin_count[axis], box_cost, frame, axis,
-                                      hairobb__b4_lane(cmin, axis), scales[axis], best);
+#if HAIROBB__SSE
+        if (r->end - r->begin <= 0x7fffffffu) {
+            hairobb__sweep_objects(bins, (const hairobb__b4 (*)[HAIROBB__BINS])bin_lower,
+                                   (const hairobb__b4 (*)[HAIROBB__BINS])bin_upper, (const uint32_t (*)[4])bin_count,
+                                   box_cost, frame, origins, scales, best);
+        } else
+#endif
+        {
+            for (axis = 0; axis < 3; ++axis)
+                if (scales[axis] > 0.0f)
+                    hairobb__sweep_object(bins, bin_lower[axis], bin_upper[axis], (const uint32_t (*)[4])bin_count,
+                                          box_cost, frame, axis, origins[axis], scales[axis], best);
+        }
     }
     for (axis = 0; axis < 3 && spatial_slack > 0; ++axis) {
         float bin_lower[HAIROBB__BINS][3], bin_upper[HAIROBB__BINS][3];
@@ -1768,15 +1856,19 @@ static void hairobb__node_box(const hairobb__builder *b, const hairobb__range *r
     float norms[3];
     int k;
     hairobb__frame_prep prep;
+    hairobb__b4 box_lower = hairobb__b4_set1(FLT_MAX), box_upper = hairobb__b4_set1(-FLT_MAX);
     hairobb__prepare_frame(frame, &prep);
     for (k = 0; k < 3; ++k)     /* rounded up: the radius must not shrink */
         norms[k] = sqrtf(hairobb__dot3(frame + 3 * k, frame + 3 * k)) * (1.0f + 1.0f / 1048576.0f);
-    hairobb__box_empty(lower, upper);
     for (i = r->begin; i < r->end; ++i) {
-        float lo[3], hi[3], scratch[16];
-        hairobb__segment_box_prep(hairobb__ref_points(b, i, scratch), &prep, centre, norms, lo, hi);
-        hairobb__box_grow(lower, upper, lo, hi);
+        float scratch[16];
+        hairobb__b4 lo, hi;
+        hairobb__segment_box_v4(hairobb__ref_points(b, i, scratch), &prep, centre, norms, &lo, &hi);
+        box_lower = hairobb__b4_min(box_lower, lo);
+        box_upper = hairobb__b4_max(box_upper, hi);
     }
+    hairobb__b4_store3(lower, box_lower);
+    hairobb__b4_store3(upper, box_upper);
     hairobb__pad_box(lower, upper);
 }
 
@@ -1886,16 +1978,15 @@ static void hairobb__set_range(hairobb__builder *b, size_t i, float u0, float u1
    plane. A hair-space split was just binned: its boxes are in frame_boxes. */
 static int hairobb__side(const hairobb__builder *b, size_t i, const hairobb__split *split)
 {
-    float lower[3], upper[3];
+    const float *box;
     if (split->kind == HAIROBB__SPLIT_CLUSTER) return hairobb__cluster_of(b, i, split->direction);
-    hairobb__box_at(b, split->hair_space ? split->frame : NULL, i, lower, upper);
+    box = (split->hair_space ? b->frame_boxes : b->world_boxes) + 6 * i + split->axis;   /* box[0] lower, box[3] upper */
     if (split->kind == HAIROBB__SPLIT_SPATIAL) {
-        int first = hairobb__bin_of(lower[split->axis], split->bin_origin, split->bin_scale);
-        int last = hairobb__bin_of(upper[split->axis], split->bin_origin, split->bin_scale);
+        int first = hairobb__bin_of(box[0], split->bin_origin, split->bin_scale);
+        int last = hairobb__bin_of(box[3], split->bin_origin, split->bin_scale);
         return last <= split->last_left_bin ? 0 : first > split->last_left_bin ? 1 : 2;
     }
-    return hairobb__bin_of(0.5f * (lower[split->axis] + upper[split->axis]), split->bin_origin, split->bin_scale)
-           > split->last_left_bin;
+    return hairobb__bin_of(0.5f * (box[0] + box[3]), split->bin_origin, split->bin_scale) > split->last_left_bin;
 }
 
 /* Clips the straddling reference at position i at the split plane: i keeps
