@@ -1427,9 +1427,11 @@ static size_t hairobb__position_at(const hairobb__range *ranges, size_t k)
    spaced references. Deterministic. Every candidate's sum in one pass over
    the samples: a sum the first candidates' best would have cut short (its
    partial sum already at least that best) loses either way, as sums only
-   grow; the world axes' sum stops at FLT_MAX, as its cut-off was. */
-static void hairobb__choose_hair_space(const hairobb__builder *b, const hairobb__range *ranges, int range_count,
-                                       int allow_identity, float best_frame[9])
+   grow; the world axes' sum stops at FLT_MAX, as its cut-off was.
+   candidate_frame, if given, gets the answer allow_identity = 0 gives (the
+   same sums), for the range's own split next (hairobb__find_split). */
+static void hairobb__choose_hair_spaces(const hairobb__builder *b, const hairobb__range *ranges, int range_count,
+                                        int allow_identity, float best_frame[9], float *candidate_frame)
 {
     size_t count = 0, step, k;
     unsigned c, candidates, n = 0;
@@ -1463,6 +1465,18 @@ static void hairobb__choose_hair_space(const hairobb__builder *b, const hairobb_
     best_area = allow_identity ? world_area : FLT_MAX;
     for (c = 0; c < n; ++c)
         if (areas[c] < best_area) { best_area = areas[c]; memcpy(best_frame, frames[c], sizeof frames[c]); }
+    if (candidate_frame) {
+        hairobb__identity_frame(candidate_frame);
+        best_area = FLT_MAX;
+        for (c = 0; c < n; ++c)
+            if (areas[c] < best_area) { best_area = areas[c]; memcpy(candidate_frame, frames[c], sizeof frames[c]); }
+    }
+}
+
+static void hairobb__choose_hair_space(const hairobb__builder *b, const hairobb__range *ranges, int range_count,
+                                       int allow_identity, float best_frame[9])
+{
+    hairobb__choose_hair_spaces(b, ranges, range_count, allow_identity, best_frame, NULL);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -1890,8 +1904,10 @@ static int hairobb__at_top(const hairobb__builder *b, size_t count) { return b->
 
 /* The cheapest split the policy and the subtree's tries allow; a median split
    when none is found (all centroids equal) or below the SAH depth. */
+/* hair_space: the frame hairobb__choose_hair_space(b, r, 1, 0, .) gives, if
+   known (NULL: chosen here). */
 static void hairobb__find_split(const hairobb__builder *b, const hairobb__range *r, unsigned depth,
-                                unsigned tries, hairobb__split *best)
+                                unsigned tries, const float *hair_space, hairobb__split *best)
 {
     float lower[3], upper[3], area = 0.0f;
     size_t slack = (tries & HAIROBB__TRY_SPATIAL) ? r->cap - r->end : 0;
@@ -1913,7 +1929,8 @@ static void hairobb__find_split(const hairobb__builder *b, const hairobb__range 
         if (b->policy != HAIROBB_NODES_AABB_ONLY && (tries & HAIROBB__TRY_HAIR_SPACE) &&
             (b->policy == HAIROBB_NODES_OBB_ONLY || !hairobb__at_top(b, r->end - r->begin))) {
             float frame[9];
-            hairobb__choose_hair_space(b, r, 1, 0, frame);
+            if (hair_space) memcpy(frame, hair_space, sizeof frame);
+            else hairobb__choose_hair_space(b, r, 1, 0, frame);
             hairobb__bin_split(b, r, frame, 2.0f * HAIROBB__COST_OBB, &area, slack, best);
         }
         if (b->policy != HAIROBB_NODES_AABB_ONLY && (tries & HAIROBB__TRY_CLUSTER))
@@ -1950,7 +1967,7 @@ static void hairobb__update_tries(hairobb__tries *t, const hairobb__split *split
    binned are read only by the partition's test of the position it looks at
    next: with frame_box, i (looked at next) gets j's; the rest are stale
    after the partition and are not moved. */
-static void hairobb__swap_positions(hairobb__builder *b, size_t i, size_t j, int frame_box)
+HAIROBB__INLINE void hairobb__swap_positions(hairobb__builder *b, size_t i, size_t j, int frame_box)
 {
     uint32_t id = b->ids[i];
     float range[2], box[6];
@@ -2046,6 +2063,18 @@ static void hairobb__partition(hairobb__builder *b, const hairobb__range *r, con
     } else {
         /* three-way: [begin, lo) left, [lo, mid) straddling, [hi, end) right */
         int frame_box = split->hair_space && split->kind != HAIROBB__SPLIT_CLUSTER;
+        if (split->kind == HAIROBB__SPLIT_OBJECT) {
+            /* hairobb__side's object test written out: no reference straddles, lo stays mid */
+            const float *box = (frame_box ? b->frame_boxes : b->world_boxes) + split->axis;
+            while (mid < hi) {
+                if (hairobb__bin_of(0.5f * (box[6 * mid] + box[6 * mid + 3]), split->bin_origin, split->bin_scale) <=
+                    split->last_left_bin)
+                    mid++;
+                else if (mid < --hi)
+                    hairobb__swap_positions(b, mid, hi, frame_box);
+            }
+            lo = mid;
+        }
         while (mid < hi) {
             int side = hairobb__side(b, mid, split);
             if (side == 0) {
@@ -2201,7 +2230,8 @@ static void hairobb__store_compressed(float step_out[3], signed char (*lower_byt
     }
 }
 
-static uint64_t hairobb__build_range(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries);
+static uint64_t hairobb__build_range(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries,
+                                     const float *hair_space);
 static uint64_t hairobb__add_task(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries);
 
 static size_t hairobb__node_size(unsigned node_type)
@@ -2225,6 +2255,9 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
 {
     hairobb__child children[HAIROBB__W];
     hairobb__range ranges[HAIROBB__W];
+    /* per-child frames: the sampled sums also answer the child's own split */
+    float hints[HAIROBB__W][9];
+    const float *hint[HAIROBB__W];
     int count = 1, use_obb = b->policy == HAIROBB_NODES_OBB_ONLY, i;
     unsigned node_type;
     size_t offset, node_size, child_offset;
@@ -2240,7 +2273,7 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
         if (pick < 0 || count == HAIROBB__W) break;
         if (count > 1) {
             size_t n = children[pick].range.end - children[pick].range.begin;
-            hairobb__find_split(b, &children[pick].range, depth + 1, tries.enabled, &split);
+            hairobb__find_split(b, &children[pick].range, depth + 1, tries.enabled, NULL, &split);
             if (!hairobb__at_top(b, n)) hairobb__update_tries(&tries, &split);
             if (n <= b->max_leaf && hairobb__leaf_cost(n, split.parent_area) <= split.cost) {
                 children[pick].final_leaf = 1;
@@ -2269,7 +2302,7 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
     if (b->error != HAIROBB_OK) return HAIROBB__REF_EMPTY;
     if (use_obb) b->stats.obb_nodes++; else b->stats.aabb_nodes++;
     /* boxes first: building the children moves references within their ranges */
-    for (i = 0; i < count; ++i) ranges[i] = children[i].range;
+    for (i = 0; i < count; ++i) { ranges[i] = children[i].range; hint[i] = NULL; }
 
     if (node_type == HAIROBB__REF_OBB) {
         hairobb__obb_node *node = HAIROBB__CAST(hairobb__obb_node *, (void *)(b->nodes + offset));
@@ -2278,7 +2311,8 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
         for (i = 0; i < HAIROBB__W; ++i) {
             float frame[9], lower[3], upper[3];
             if (i < count) {
-                hairobb__choose_hair_space(b, &ranges[i], 1, 1, frame);
+                hairobb__choose_hair_spaces(b, &ranges[i], 1, 1, frame, hints[i]);
+                hint[i] = hints[i];
                 hairobb__node_box(b, &ranges[i], frame, node->centre, lower, upper);
             } else {
                 /* an empty child maps everything to (2,2,2): never inside the unit cube */
@@ -2298,7 +2332,8 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
             float frame[9];
             signed char q[9];
             int k;
-            hairobb__choose_hair_space(b, &ranges[i], 1, 1, frame);
+            hairobb__choose_hair_spaces(b, &ranges[i], 1, 1, frame, hints[i]);
+            hint[i] = hints[i];
             for (k = 0; k < 9; ++k) node->rotation[k][i] = q[k] = (signed char)lrintf(frame[k] * 127.0f);
             hairobb__decode_rotation(q, frame);
             hairobb__node_box(b, &ranges[i], frame, node->centre, lower[i], upper[i]);
@@ -2363,7 +2398,7 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
         if (children[i].final_leaf || n == 1 || (count == HAIROBB__W && n <= HAIROBB__FULL_NODE_LEAF && n <= b->max_leaf))
             ref = hairobb__make_leaf(b, c, depth + 1);
         else
-            ref = hairobb__build_range(b, c, depth + 1, tries);
+            ref = hairobb__build_range(b, c, depth + 1, tries, hint[i]);
         if (b->error != HAIROBB_OK) return HAIROBB__REF_EMPTY;
         /* node memory may have moved: child[] at its offset in the node */
         memcpy(b->nodes + offset + child_offset + i * sizeof(uint64_t), &ref, sizeof ref);
@@ -2391,13 +2426,15 @@ static uint64_t hairobb__add_task(hairobb__builder *b, const hairobb__range *r, 
     return ((uint64_t)b->task_count++ << 4) | HAIROBB__REF_TASK;
 }
 
-static uint64_t hairobb__build_range(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries)
+/* hair_space: see hairobb__find_split */
+static uint64_t hairobb__build_range(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries,
+                                     const float *hair_space)
 {
     hairobb__split split;
     size_t n = r->end - r->begin;
     if (n == 1) return hairobb__make_leaf(b, r, depth);
     if (n <= b->task_limit) return hairobb__add_task(b, r, depth, tries);
-    hairobb__find_split(b, r, depth, tries.enabled, &split);
+    hairobb__find_split(b, r, depth, tries.enabled, hair_space, &split);
     if (!hairobb__at_top(b, n)) hairobb__update_tries(&tries, &split);
     if (n <= b->max_leaf && hairobb__leaf_cost(n, split.parent_area) <= split.cost)
         return hairobb__make_leaf(b, r, depth);
@@ -2417,7 +2454,7 @@ static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task)
     local.task_limit = 0;           /* no tasks within a task; no progress calls */
     local.tasks = NULL;
     local.task_count = local.task_capacity = 0;
-    task->root = hairobb__build_range(&local, &task->range, task->depth, task->tries);
+    task->root = hairobb__build_range(&local, &task->range, task->depth, task->tries, NULL);
     task->node_allocation = local.node_allocation;
     task->nodes = local.nodes;
     task->node_bytes = local.node_bytes;
@@ -2723,7 +2760,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     /* the top of the tree here, subtrees of at most task_limit references as
        tasks; the limit depends on the input alone (same tree on any thread count) */
     b.task_limit = segment_count / HAIROBB__TASKS > HAIROBB__TASK_MIN ? segment_count / HAIROBB__TASKS : HAIROBB__TASK_MIN;
-    bvh->root = hairobb__build_range(&b, &root, 0, tries);
+    bvh->root = hairobb__build_range(&b, &root, 0, tries, NULL);
     if (b.error == HAIROBB_OK) hairobb__run_tasks(&b, opt.threads, opt.parallel_for, opt.parallel_for_user);
     if (b.error == HAIROBB_OK) hairobb__gather_tasks(&b);
     if (b.error != HAIROBB_OK) goto failed;
