@@ -871,50 +871,165 @@ static void hairobb__to_bezier(hairobb_basis basis, const float *p, const float 
     for (c = 3; c < 16; c += 4) b[c] = hairobb__maxf(b[c], 0.0f);
 }
 
+/* The bin (of HAIROBB__BINS) of coordinate x for binning from origin. */
+static int hairobb__bin_of(float x, float origin, float scale)
+{
+    float position = (x - origin) * scale;
+    /* clamped before the conversion: a float out of int's range (or NaN)
+       converted to int is undefined */
+    if (!(position >= 1.0f)) return 0;
+    return position >= (float)(HAIROBB__BINS - 1) ? HAIROBB__BINS - 1 : (int)position;
+}
+
+/* Four float lanes for the builder's boxes (x, y, z and one unused): SSE,
+   or a plain C twin computing each lane with the same operations, so both
+   build the same tree. */
+#if HAIROBB__SSE
+typedef __m128 hairobb__b4;
+HAIROBB__INLINE hairobb__b4 hairobb__b4_set1(float x) { return _mm_set1_ps(x); }
+HAIROBB__INLINE hairobb__b4 hairobb__b4_set3(const float p[3]) { return _mm_setr_ps(p[0], p[1], p[2], 0.0f); }
+HAIROBB__INLINE hairobb__b4 hairobb__b4_load4(const float *p) { return _mm_loadu_ps(p); }
+/* a box's upper corner, box[3..5], without reading past box[5] */
+HAIROBB__INLINE hairobb__b4 hairobb__b4_load_upper(const float *box)
+{
+    __m128 v = _mm_loadu_ps(box + 2);
+    return _mm_shuffle_ps(v, v, _MM_SHUFFLE(3, 3, 2, 1));
+}
+HAIROBB__INLINE hairobb__b4 hairobb__b4_add(hairobb__b4 a, hairobb__b4 b) { return _mm_add_ps(a, b); }
+HAIROBB__INLINE hairobb__b4 hairobb__b4_sub(hairobb__b4 a, hairobb__b4 b) { return _mm_sub_ps(a, b); }
+HAIROBB__INLINE hairobb__b4 hairobb__b4_mul(hairobb__b4 a, hairobb__b4 b) { return _mm_mul_ps(a, b); }
+/* a < b ? a : b and a > b ? a : b per lane, as hairobb__minf/maxf */
+HAIROBB__INLINE hairobb__b4 hairobb__b4_min(hairobb__b4 a, hairobb__b4 b) { return _mm_min_ps(a, b); }
+HAIROBB__INLINE hairobb__b4 hairobb__b4_max(hairobb__b4 a, hairobb__b4 b) { return _mm_max_ps(a, b); }
+HAIROBB__INLINE void hairobb__b4_store3(float *p, hairobb__b4 v)
+{
+    _mm_storel_pi(HAIROBB__CAST(__m64 *, HAIROBB__CAST(void *, p)), v);
+    _mm_store_ss(p + 2, _mm_movehl_ps(v, v));
+}
+HAIROBB__INLINE float hairobb__b4_lane(hairobb__b4 v, int k)
+{
+    float f[4];
+    _mm_storeu_ps(f, v);
+    return f[k];
+}
+/* hairobb__half_area of the box's lanes 0-2: (dx dy + dy dz) + dz dx */
+HAIROBB__INLINE float hairobb__b4_half_area(hairobb__b4 lower, hairobb__b4 upper)
+{
+    __m128 d = _mm_sub_ps(upper, lower), p = _mm_mul_ps(d, _mm_shuffle_ps(d, d, _MM_SHUFFLE(3, 0, 2, 1)));
+    return _mm_cvtss_f32(_mm_add_ss(_mm_add_ss(p, _mm_shuffle_ps(p, p, _MM_SHUFFLE(1, 1, 1, 1))),
+                                    _mm_shuffle_ps(p, p, _MM_SHUFFLE(2, 2, 2, 2))));
+}
+/* hairobb__bin_of of lanes 0-2 (position = (x - origin) * scale given) */
+HAIROBB__INLINE void hairobb__b4_bins(hairobb__b4 position, int bin[4])
+{
+    __m128 in = _mm_cmpge_ps(position, _mm_set1_ps(1.0f));     /* false for NaN */
+    __m128 clamped = _mm_and_ps(in, _mm_min_ps(position, _mm_set1_ps((float)(HAIROBB__BINS - 1))));
+    _mm_storeu_si128(HAIROBB__CAST(__m128i *, HAIROBB__CAST(void *, bin)), _mm_cvttps_epi32(clamped));
+}
+#else
+typedef struct hairobb__b4 { float v[4]; } hairobb__b4;
+HAIROBB__INLINE hairobb__b4 hairobb__b4_set1(float x) { hairobb__b4 r; r.v[0] = r.v[1] = r.v[2] = r.v[3] = x; return r; }
+HAIROBB__INLINE hairobb__b4 hairobb__b4_set3(const float p[3]) { hairobb__b4 r; r.v[0] = p[0]; r.v[1] = p[1]; r.v[2] = p[2]; r.v[3] = 0.0f; return r; }
+HAIROBB__INLINE hairobb__b4 hairobb__b4_load4(const float *p) { hairobb__b4 r; memcpy(r.v, p, sizeof r.v); return r; }
+HAIROBB__INLINE hairobb__b4 hairobb__b4_load_upper(const float *box)
+{
+    hairobb__b4 r;
+    r.v[0] = box[3]; r.v[1] = box[4]; r.v[2] = box[5]; r.v[3] = box[5];
+    return r;
+}
+#define HAIROBB__B4_LANES(name, expr) \
+    HAIROBB__INLINE hairobb__b4 name(hairobb__b4 a, hairobb__b4 b) \
+    { hairobb__b4 r; int k; for (k = 0; k < 4; ++k) r.v[k] = expr; return r; }
+HAIROBB__B4_LANES(hairobb__b4_add, a.v[k] + b.v[k])
+HAIROBB__B4_LANES(hairobb__b4_sub, a.v[k] - b.v[k])
+HAIROBB__B4_LANES(hairobb__b4_mul, a.v[k] * b.v[k])
+HAIROBB__B4_LANES(hairobb__b4_min, hairobb__minf(a.v[k], b.v[k]))
+HAIROBB__B4_LANES(hairobb__b4_max, hairobb__maxf(a.v[k], b.v[k]))
+#undef HAIROBB__B4_LANES
+HAIROBB__INLINE void hairobb__b4_store3(float *p, hairobb__b4 v) { memcpy(p, v.v, 3 * sizeof(float)); }
+HAIROBB__INLINE float hairobb__b4_lane(hairobb__b4 v, int k) { return v.v[k]; }
+HAIROBB__INLINE float hairobb__b4_half_area(hairobb__b4 lower, hairobb__b4 upper)
+{
+    return hairobb__half_area(lower.v, upper.v);
+}
+HAIROBB__INLINE void hairobb__b4_bins(hairobb__b4 position, int bin[4])
+{
+    int k;
+    for (k = 0; k < 3; ++k) bin[k] = hairobb__bin_of(position.v[k], 0.0f, 1.0f);
+    bin[3] = 0;
+}
+#endif
+
+/* A frame ready for many hairobb__segment_box calls: its columns (lane k =
+   row k), so that a control point is rotated with three splats. */
+typedef struct hairobb__frame_prep {
+    hairobb__b4 col[3];
+} hairobb__frame_prep;
+
+static void hairobb__prepare_frame(const float frame[9], hairobb__frame_prep *p)
+{
+    int c;
+    for (c = 0; c < 3; ++c) {
+        float column[3];
+        column[0] = frame[c]; column[1] = frame[3 + c]; column[2] = frame[6 + c];
+        p->col[c] = hairobb__b4_set3(column);
+    }
+}
+
+/* Control point p (x, y, z in lanes 0-2) in the frame: lane k =
+   (frame[3k] x + frame[3k+1] y) + frame[3k+2] z. */
+HAIROBB__INLINE hairobb__b4 hairobb__rotate_point(const hairobb__frame_prep *f, hairobb__b4 p)
+{
+#if HAIROBB__SSE
+    return _mm_add_ps(_mm_add_ps(_mm_mul_ps(f->col[0], _mm_shuffle_ps(p, p, _MM_SHUFFLE(0, 0, 0, 0))),
+                                 _mm_mul_ps(f->col[1], _mm_shuffle_ps(p, p, _MM_SHUFFLE(1, 1, 1, 1)))),
+                      _mm_mul_ps(f->col[2], _mm_shuffle_ps(p, p, _MM_SHUFFLE(2, 2, 2, 2))));
+#else
+    return hairobb__b4_add(hairobb__b4_add(hairobb__b4_mul(f->col[0], hairobb__b4_set1(p.v[0])),
+                                           hairobb__b4_mul(f->col[1], hairobb__b4_set1(p.v[1]))),
+                           hairobb__b4_mul(f->col[2], hairobb__b4_set1(p.v[2])));
+#endif
+}
+
 /* Box of a segment in a rotated frame (rows of frame are the new axes).
    The ribbon lies in the convex hull of the control points dilated by the
    largest radius (r(u) is a convex combination of the 4 radii), so the box of
    the rotated control points grown by that radius bounds it. centre, if
    given, is subtracted first; row_norms, if given, scale the radius along
    each row of a frame that is not orthonormal (a quantised one). Node boxes
-   are padded for rounding once, when stored (hairobb__pad_box). */
+   are padded for rounding once, when stored (hairobb__pad_box). Lanes 0-2
+   of *lower and *upper; subtracting a zero centre and scaling by unit
+   norms change no bit. */
+HAIROBB__INLINE void hairobb__segment_box_v4(const float *cp, const hairobb__frame_prep *f, const float *centre,
+                                             const float *row_norms, hairobb__b4 *lower, hairobb__b4 *upper)
+{
+    static const float zero[3] = {0.0f, 0.0f, 0.0f}, one[3] = {1.0f, 1.0f, 1.0f};
+    float radius = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
+    hairobb__b4 c = hairobb__b4_set3(centre ? centre : zero);
+    hairobb__b4 r = hairobb__b4_mul(hairobb__b4_set1(radius), hairobb__b4_set3(row_norms ? row_norms : one));
+    hairobb__b4 v0 = hairobb__rotate_point(f, hairobb__b4_sub(hairobb__b4_load4(cp), c));
+    hairobb__b4 v1 = hairobb__rotate_point(f, hairobb__b4_sub(hairobb__b4_load4(cp + 4), c));
+    hairobb__b4 v2 = hairobb__rotate_point(f, hairobb__b4_sub(hairobb__b4_load4(cp + 8), c));
+    hairobb__b4 v3 = hairobb__rotate_point(f, hairobb__b4_sub(hairobb__b4_load4(cp + 12), c));
+    *lower = hairobb__b4_sub(hairobb__b4_min(hairobb__b4_min(v0, v1), hairobb__b4_min(v2, v3)), r);
+    *upper = hairobb__b4_add(hairobb__b4_max(hairobb__b4_max(v0, v1), hairobb__b4_max(v2, v3)), r);
+}
+
+HAIROBB__INLINE void hairobb__segment_box_prep(const float *cp, const hairobb__frame_prep *f, const float *centre,
+                                               const float *row_norms, float lower[3], float upper[3])
+{
+    hairobb__b4 lo, hi;
+    hairobb__segment_box_v4(cp, f, centre, row_norms, &lo, &hi);
+    hairobb__b4_store3(lower, lo);
+    hairobb__b4_store3(upper, hi);
+}
+
 static void hairobb__segment_box(const float *cp, const float frame[9], const float *centre, const float *row_norms,
                                  float lower[3], float upper[3])
 {
-    float radius = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
-    int k;
-#if HAIROBB__SSE
-    /* lanes = the 4 control points; the same products and sums as below */
-    __m128 x = _mm_setr_ps(cp[0], cp[4], cp[8], cp[12]), y = _mm_setr_ps(cp[1], cp[5], cp[9], cp[13]);
-    __m128 z = _mm_setr_ps(cp[2], cp[6], cp[10], cp[14]);
-    if (centre) {
-        x = _mm_sub_ps(x, _mm_set1_ps(centre[0]));
-        y = _mm_sub_ps(y, _mm_set1_ps(centre[1]));
-        z = _mm_sub_ps(z, _mm_set1_ps(centre[2]));
-    }
-    for (k = 0; k < 3; ++k) {
-        __m128 v = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_set1_ps(frame[3 * k]), x), _mm_mul_ps(_mm_set1_ps(frame[3 * k + 1]), y)),
-                              _mm_mul_ps(_mm_set1_ps(frame[3 * k + 2]), z));
-        __m128 swapped = _mm_shuffle_ps(v, v, _MM_SHUFFLE(2, 3, 0, 1));
-        __m128 lo = _mm_min_ps(v, swapped), hi = _mm_max_ps(v, swapped);
-        lo = _mm_min_ps(lo, _mm_shuffle_ps(lo, lo, _MM_SHUFFLE(1, 0, 3, 2)));
-        hi = _mm_max_ps(hi, _mm_shuffle_ps(hi, hi, _MM_SHUFFLE(1, 0, 3, 2)));
-        lower[k] = _mm_cvtss_f32(lo) - (row_norms ? radius * row_norms[k] : radius);
-        upper[k] = _mm_cvtss_f32(hi) + (row_norms ? radius * row_norms[k] : radius);
-    }
-#else
-    float p[4][3], c[3];
-    int i;
-    c[0] = centre ? centre[0] : 0.0f; c[1] = centre ? centre[1] : 0.0f; c[2] = centre ? centre[2] : 0.0f;
-    for (i = 0; i < 4; ++i)
-        for (k = 0; k < 3; ++k) p[i][k] = centre ? cp[4 * i + k] - c[k] : cp[4 * i + k];
-    for (k = 0; k < 3; ++k) {
-        float v[4];
-        for (i = 0; i < 4; ++i) v[i] = frame[3 * k] * p[i][0] + frame[3 * k + 1] * p[i][1] + frame[3 * k + 2] * p[i][2];
-        lower[k] = hairobb__minf(hairobb__minf(v[0], v[1]), hairobb__minf(v[2], v[3])) - (row_norms ? radius * row_norms[k] : radius);
-        upper[k] = hairobb__maxf(hairobb__maxf(v[0], v[1]), hairobb__maxf(v[2], v[3])) + (row_norms ? radius * row_norms[k] : radius);
-    }
-#endif
+    hairobb__frame_prep f;
+    hairobb__prepare_frame(frame, &f);
+    hairobb__segment_box_prep(cp, &f, centre, row_norms, lower, upper);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -1238,15 +1353,12 @@ typedef struct hairobb__task {
     int ran;                          /* a user's parallel_for must run each task */
 } hairobb__task;
 
-/* Control points (x, y, z, r each) of the reference at position i: the
-   caller's, or those of its clipped part, computed in double from the
-   blossom of the segment so the float hull still holds the curve. */
-static const float *hairobb__ref_points(const hairobb__builder *b, size_t i, float scratch[16])
+/* Control points (x, y, z, r each) of the part [u0, u1] of a segment cp
+   that spatial splits clipped, computed in double from the blossom of the
+   segment so the float hull still holds the curve. */
+static const float *hairobb__clipped_points(const float *cp, double u0, double u1, float scratch[16])
 {
-    const float *cp = b->vertices + 4 * (size_t)b->indices[b->ids[i]];
-    double u0 = b->ranges[2 * i], u1 = b->ranges[2 * i + 1];
     int point, k;
-    if (u0 == 0.0 && u1 == 1.0) return cp;
     for (point = 0; point < 4; ++point) {
         /* blossom B(t1, t2, t3) with the t's u0 or u1: point 0 = (u0,u0,u0), 3 = (u1,u1,u1) */
         double t[3];
@@ -1265,7 +1377,19 @@ static const float *hairobb__ref_points(const hairobb__builder *b, size_t i, flo
     return scratch;
 }
 
-static void hairobb__prim_box(const hairobb__builder *b, size_t i, const float *frame,
+/* Control points of the reference at position i: the caller's, or its
+   clipped part's. Inline: most references are whole segments, and every
+   box pass asks. */
+HAIROBB__INLINE const float *hairobb__ref_points(const hairobb__builder *b, size_t i, float scratch[16])
+{
+    static const float whole[2] = {0.0f, 1.0f};
+    const float *cp = b->vertices + 4 * (size_t)b->indices[b->ids[i]];
+    /* the bits of [0, 1]: u0 is +0 or above (set_range's 0, or a clip strictly inside) */
+    if (memcmp(b->ranges + 2 * i, whole, sizeof whole) == 0) return cp;
+    return hairobb__clipped_points(cp, b->ranges[2 * i], b->ranges[2 * i + 1], scratch);
+}
+
+static void hairobb__prim_box(const hairobb__builder *b, size_t i, const hairobb__frame_prep *frame,
                               float lower[3], float upper[3])
 {
     if (!frame) {
@@ -1273,7 +1397,7 @@ static void hairobb__prim_box(const hairobb__builder *b, size_t i, const float *
         memcpy(upper, b->world_boxes + 6 * i + 3, 3 * sizeof(float));
     } else {
         float scratch[16];
-        hairobb__segment_box(hairobb__ref_points(b, i, scratch), frame, NULL, NULL, lower, upper);
+        hairobb__segment_box_prep(hairobb__ref_points(b, i, scratch), frame, NULL, NULL, lower, upper);
     }
 }
 
@@ -1290,8 +1414,6 @@ static int hairobb__ref_direction(const hairobb__builder *b, size_t i, float d[3
     return 1;
 }
 
-/* Sum of the surface areas of up to HAIROBB__SAMPLE evenly spaced
-   references of the range in frame (NULL: world), stopping past `limit`. */
 /* The position of the k-th reference of a list of ranges. */
 static size_t hairobb__position_at(const hairobb__range *ranges, size_t k)
 {
@@ -1299,44 +1421,62 @@ static size_t hairobb__position_at(const hairobb__range *ranges, size_t k)
     return ranges->begin + k;
 }
 
-/* Sum of the surface areas of up to HAIROBB__SAMPLE evenly spaced
-   references of the ranges (count references in all) in frame (NULL: world),
-   stopping past `limit`. */
-static float hairobb__sampled_area(const hairobb__builder *b, const hairobb__range *ranges, size_t count,
-                                   const float *frame, float limit)
-{
-    size_t step = count > HAIROBB__SAMPLE ? count / HAIROBB__SAMPLE : 1, k;
-    float area = 0.0f;
-    for (k = 0; k < count && area < limit; k += step) {
-        float lower[3], upper[3];
-        hairobb__prim_box(b, hairobb__position_at(ranges, k), frame, lower, upper);
-        area += hairobb__half_area(lower, upper);
-    }
-    return area;
-}
-
 /* Picks, among the main directions of evenly spaced references of the
    ranges (and the world axes when allow_identity), the rotation with the
-   smallest summed surface area of the sampled references' boxes. Deterministic. */
-static void hairobb__choose_hair_space(const hairobb__builder *b, const hairobb__range *ranges, int range_count,
-                                       int allow_identity, float best_frame[9])
+   smallest summed surface area of the boxes of up to HAIROBB__SAMPLE evenly
+   spaced references. Deterministic. Every candidate's sum in one pass over
+   the samples: a sum the first candidates' best would have cut short (its
+   partial sum already at least that best) loses either way, as sums only
+   grow; the world axes' sum stops at FLT_MAX, as its cut-off was.
+   candidate_frame, if given, gets the answer allow_identity = 0 gives (the
+   same sums), for the range's own split next (hairobb__find_split). */
+static void hairobb__choose_hair_spaces(const hairobb__builder *b, const hairobb__range *ranges, int range_count,
+                                        int allow_identity, float best_frame[9], float *candidate_frame)
 {
-    size_t count = 0;
-    unsigned c, candidates;
-    float best_area = FLT_MAX;
+    size_t count = 0, step, k;
+    unsigned c, candidates, n = 0;
+    float frames[HAIROBB__MAX_CANDIDATES][9], areas[HAIROBB__MAX_CANDIDATES], world_area = 0.0f, best_area;
+    hairobb__frame_prep preps[HAIROBB__MAX_CANDIDATES];
     int i;
     for (i = 0; i < range_count; ++i) count += ranges[i].end - ranges[i].begin;
     candidates = b->candidates < count ? b->candidates : (unsigned)count;
-    hairobb__identity_frame(best_frame);
-    if (allow_identity) best_area = hairobb__sampled_area(b, ranges, count, NULL, FLT_MAX);
     for (c = 0; c < candidates; ++c) {
-        float frame[9], d[3], area;
+        float d[3];
         size_t pick = hairobb__position_at(ranges, (count * (2 * c + 1)) / (2 * candidates));
         if (!hairobb__ref_direction(b, pick, d)) continue;
-        hairobb__frame_from_direction(d, frame);
-        area = hairobb__sampled_area(b, ranges, count, frame, best_area);
-        if (area < best_area) { best_area = area; memcpy(best_frame, frame, sizeof frame); }
+        hairobb__frame_from_direction(d, frames[n]);
+        hairobb__prepare_frame(frames[n], &preps[n]);
+        areas[n++] = 0.0f;
     }
+    step = count > HAIROBB__SAMPLE ? count / HAIROBB__SAMPLE : 1;
+    for (k = 0; k < count; k += step) {
+        size_t at = hairobb__position_at(ranges, k);
+        float scratch[16];
+        const float *cp = hairobb__ref_points(b, at, scratch);
+        if (allow_identity && world_area < FLT_MAX)
+            world_area += hairobb__half_area(b->world_boxes + 6 * at, b->world_boxes + 6 * at + 3);
+        for (c = 0; c < n; ++c) {
+            hairobb__b4 lower, upper;
+            hairobb__segment_box_v4(cp, &preps[c], NULL, NULL, &lower, &upper);
+            areas[c] += hairobb__b4_half_area(lower, upper);
+        }
+    }
+    hairobb__identity_frame(best_frame);
+    best_area = allow_identity ? world_area : FLT_MAX;
+    for (c = 0; c < n; ++c)
+        if (areas[c] < best_area) { best_area = areas[c]; memcpy(best_frame, frames[c], sizeof frames[c]); }
+    if (candidate_frame) {
+        hairobb__identity_frame(candidate_frame);
+        best_area = FLT_MAX;
+        for (c = 0; c < n; ++c)
+            if (areas[c] < best_area) { best_area = areas[c]; memcpy(candidate_frame, frames[c], sizeof frames[c]); }
+    }
+}
+
+static void hairobb__choose_hair_space(const hairobb__builder *b, const hairobb__range *ranges, int range_count,
+                                       int allow_identity, float best_frame[9])
+{
+    hairobb__choose_hair_spaces(b, ranges, range_count, allow_identity, best_frame, NULL);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -1359,14 +1499,6 @@ typedef struct hairobb__split {
     float parent_area;          /* world box of the range being split */
 } hairobb__split;
 
-static int hairobb__bin_of(float x, float origin, float scale)
-{
-    float position = (x - origin) * scale;
-    /* clamped before the conversion: a float out of int's range (or NaN)
-       converted to int is undefined */
-    if (!(position >= 1.0f)) return 0;
-    return position >= (float)(HAIROBB__BINS - 1) ? HAIROBB__BINS - 1 : (int)position;
-}
 
 /* Bins per unit of an extent, just under bins / extent so that the upper
    end falls in the last bin; 0 (do not bin) for extents so small that the
@@ -1383,6 +1515,23 @@ static void hairobb__box_at(const hairobb__builder *b, const float *frame, size_
     const float *box = frame ? b->frame_boxes + 6 * i : b->world_boxes + 6 * i;
     memcpy(lower, box, 3 * sizeof(float));
     memcpy(upper, box + 3, 3 * sizeof(float));
+}
+
+/* The plane after bin `bin` of a sweep is the best split so far. */
+static void hairobb__take_split(hairobb__split *best, float cost, int kind, const float *frame, int axis, float origin,
+                                float scale, int bin, float left_area, float right_area)
+{
+    best->cost = cost;
+    best->kind = kind;
+    best->hair_space = frame != NULL;
+    best->heuristic = (frame ? HAIROBB__TRY_HAIR_SPACE : 0u) | (kind == HAIROBB__SPLIT_SPATIAL ? HAIROBB__TRY_SPATIAL : 0u);
+    if (frame) memcpy(best->frame, frame, sizeof best->frame);
+    best->axis = axis;
+    best->bin_origin = origin;
+    best->bin_scale = scale;
+    best->last_left_bin = bin;
+    best->area_left = left_area;
+    best->area_right = right_area;
 }
 
 /* One sweep over binned boxes: counts[bin] enter from the left (entries) and
@@ -1409,76 +1558,201 @@ static void hairobb__sweep_bins(int bins, const float bin_lower[][3], const floa
         if (left_count == 0 || right_count[bin + 1] == 0) continue;
         left_area = hairobb__half_area(lo, hi);
         cost = box_cost + HAIROBB__COST_SEGMENT * (left_area * (float)left_count + right_area[bin + 1] * (float)right_count[bin + 1]);
-        if (cost < best->cost) {
-            best->cost = cost;
-            best->kind = kind;
-            best->hair_space = frame != NULL;
-            best->heuristic = (frame ? HAIROBB__TRY_HAIR_SPACE : 0u) | (kind == HAIROBB__SPLIT_SPATIAL ? HAIROBB__TRY_SPATIAL : 0u);
-            if (frame) memcpy(best->frame, frame, sizeof best->frame);
-            best->axis = axis;
-            best->bin_origin = origin;
-            best->bin_scale = scale;
-            best->last_left_bin = bin;
-            best->area_left = left_area;
-            best->area_right = right_area[bin + 1];
-        }
+        if (cost < best->cost) hairobb__take_split(best, cost, kind, frame, axis, origin, scale, bin, left_area, right_area[bin + 1]);
     }
 }
+
+/* hairobb__sweep_bins for object bins (entries = exits = count) on boxes
+   in lanes, the same floats in the same order. */
+static void hairobb__sweep_object(int bins, const hairobb__b4 *bin_lower, const hairobb__b4 *bin_upper,
+                                  const uint32_t (*count)[4], float box_cost, const float *frame, int axis, float origin,
+                                  float scale, hairobb__split *best)
+{
+    float right_area[HAIROBB__BINS];
+    uint32_t right_count[HAIROBB__BINS + 1], left_count = 0;   /* converted to float as the size_t counts were */
+    hairobb__b4 lo = hairobb__b4_set1(FLT_MAX), hi = hairobb__b4_set1(-FLT_MAX);
+    int bin;
+    right_count[bins] = 0;
+    for (bin = bins - 1; bin > 0; --bin) {
+        lo = hairobb__b4_min(lo, bin_lower[bin]);
+        hi = hairobb__b4_max(hi, bin_upper[bin]);
+        right_count[bin] = count[bin][axis] + right_count[bin + 1];
+        right_area[bin] = right_count[bin] ? hairobb__b4_half_area(lo, hi) : 0.0f;
+    }
+    lo = hairobb__b4_set1(FLT_MAX);
+    hi = hairobb__b4_set1(-FLT_MAX);
+    for (bin = 0; bin < bins - 1; ++bin) {
+        float cost, left_area;
+        lo = hairobb__b4_min(lo, bin_lower[bin]);
+        hi = hairobb__b4_max(hi, bin_upper[bin]);
+        left_count += count[bin][axis];
+        if (left_count == 0 || right_count[bin + 1] == 0) continue;
+        left_area = hairobb__b4_half_area(lo, hi);
+        cost = box_cost + HAIROBB__COST_SEGMENT * (left_area * (float)left_count + right_area[bin + 1] * (float)right_count[bin + 1]);
+        if (cost < best->cost)
+            hairobb__take_split(best, cost, HAIROBB__SPLIT_OBJECT, frame, axis, origin, scale, bin, left_area, right_area[bin + 1]);
+    }
+}
+
+#if HAIROBB__SSE
+/* (dx dy + dy dz) + dz dx of boxes with one axis per vector (lanes: boxes) */
+HAIROBB__INLINE __m128 hairobb__half_areas(const __m128 lower[3], const __m128 upper[3])
+{
+    __m128 dx = _mm_sub_ps(upper[0], lower[0]), dy = _mm_sub_ps(upper[1], lower[1]), dz = _mm_sub_ps(upper[2], lower[2]);
+    return _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dy), _mm_mul_ps(dy, dz)), _mm_mul_ps(dz, dx));
+}
+
+/* The three axes' hairobb__sweep_object at once, lane = axis (bins
+   transposed): the same floats. Each lane keeps its first cheapest plane,
+   then the axes in order beat *best or not, as one sweep after the other
+   would have left it. Counts below 2^31 (int lanes). */
+static void hairobb__sweep_objects(int bins, const hairobb__b4 (*bin_lower)[HAIROBB__BINS],
+                                   const hairobb__b4 (*bin_upper)[HAIROBB__BINS], const uint32_t (*count)[4],
+                                   float box_cost, const float *frame, const float origin[3], const float scale[3],
+                                   hairobb__split *best)
+{
+    __m128 box[HAIROBB__BINS][6], right_area[HAIROBB__BINS], lo[3], hi[3];
+    __m128 best_cost = _mm_set1_ps(INFINITY), best_left = _mm_setzero_ps(), best_right = _mm_setzero_ps();
+    __m128i right_count[HAIROBB__BINS + 1], zero = _mm_setzero_si128(), left_count = zero, best_bin = zero;
+    float costs[4], lefts[4], rights[4];
+    int bin, k, bins_at[4];
+    for (bin = 0; bin < bins; ++bin) {
+        __m128 l0 = bin_lower[0][bin], l1 = bin_lower[1][bin], l2 = bin_lower[2][bin], l3 = l2;
+        __m128 u0 = bin_upper[0][bin], u1 = bin_upper[1][bin], u2 = bin_upper[2][bin], u3 = u2;
+        _MM_TRANSPOSE4_PS(l0, l1, l2, l3);
+        _MM_TRANSPOSE4_PS(u0, u1, u2, u3);
+        box[bin][0] = l0; box[bin][1] = l1; box[bin][2] = l2;
+        box[bin][3] = u0; box[bin][4] = u1; box[bin][5] = u2;
+    }
+    /* written out: gcc -O2 kept a loop over k here */
+#define HAIROBB__GROW_AXES(bin) \
+        lo[0] = _mm_min_ps(lo[0], box[bin][0]); hi[0] = _mm_max_ps(hi[0], box[bin][3]); \
+        lo[1] = _mm_min_ps(lo[1], box[bin][1]); hi[1] = _mm_max_ps(hi[1], box[bin][4]); \
+        lo[2] = _mm_min_ps(lo[2], box[bin][2]); hi[2] = _mm_max_ps(hi[2], box[bin][5]);
+    for (k = 0; k < 3; ++k) { lo[k] = _mm_set1_ps(FLT_MAX); hi[k] = _mm_set1_ps(-FLT_MAX); }
+    right_count[bins] = zero;
+    for (bin = bins - 1; bin > 0; --bin) {
+        __m128i n;
+        HAIROBB__GROW_AXES(bin)
+        n = right_count[bin] = _mm_add_epi32(_mm_loadu_si128(HAIROBB__CAST(const __m128i *, HAIROBB__CAST(const void *, count[bin]))),
+                                             right_count[bin + 1]);
+        right_area[bin] = _mm_andnot_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(n, zero)), hairobb__half_areas(lo, hi));
+    }
+    for (k = 0; k < 3; ++k) { lo[k] = _mm_set1_ps(FLT_MAX); hi[k] = _mm_set1_ps(-FLT_MAX); }
+    for (bin = 0; bin < bins - 1; ++bin) {
+        __m128i n = right_count[bin + 1];
+        __m128 empty, left_area, cost, take;
+        HAIROBB__GROW_AXES(bin)
+        left_count = _mm_add_epi32(left_count, _mm_loadu_si128(HAIROBB__CAST(const __m128i *, HAIROBB__CAST(const void *, count[bin]))));
+        empty = _mm_castsi128_ps(_mm_or_si128(_mm_cmpeq_epi32(left_count, zero), _mm_cmpeq_epi32(n, zero)));
+        left_area = hairobb__half_areas(lo, hi);
+        cost = _mm_add_ps(_mm_set1_ps(box_cost),
+                          _mm_mul_ps(_mm_set1_ps(HAIROBB__COST_SEGMENT),
+                                     _mm_add_ps(_mm_mul_ps(left_area, _mm_cvtepi32_ps(left_count)),
+                                                _mm_mul_ps(right_area[bin + 1], _mm_cvtepi32_ps(n)))));
+        take = _mm_andnot_ps(empty, _mm_cmplt_ps(cost, best_cost));
+        best_cost = _mm_or_ps(_mm_and_ps(take, cost), _mm_andnot_ps(take, best_cost));
+        best_left = _mm_or_ps(_mm_and_ps(take, left_area), _mm_andnot_ps(take, best_left));
+        best_right = _mm_or_ps(_mm_and_ps(take, right_area[bin + 1]), _mm_andnot_ps(take, best_right));
+        best_bin = _mm_or_si128(_mm_and_si128(_mm_castps_si128(take), _mm_set1_epi32(bin)),
+                                _mm_andnot_si128(_mm_castps_si128(take), best_bin));
+    }
+#undef HAIROBB__GROW_AXES
+    _mm_storeu_ps(costs, best_cost);
+    _mm_storeu_ps(lefts, best_left);
+    _mm_storeu_ps(rights, best_right);
+    _mm_storeu_si128(HAIROBB__CAST(__m128i *, HAIROBB__CAST(void *, bins_at)), best_bin);
+    for (k = 0; k < 3; ++k)
+        if (scale[k] > 0.0f && costs[k] < best->cost)
+            hairobb__take_split(best, costs[k], HAIROBB__SPLIT_OBJECT, frame, k, origin[k], scale[k], bins_at[k], lefts[k], rights[k]);
+}
+#endif
 
 /* Best SAH split of the range binned along the axes of frame (NULL = world
    axes): by centroid (object split) and, with spatial_slack > 0, by
    clipping references at the bin planes (spatial split) when at most
    spatial_slack of them straddle the plane. Costs are SAH costs times the
-   parent's area; box_cost is that of testing the two new child boxes. */
+   parent's area *area: binning in world axes computes it (the half area of
+   the range's world box, as hairobb__range_box gives), in a frame reads it;
+   box_per_area times it is the cost of testing the two new child boxes. */
 static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *r, const float *frame,
-                               float box_cost, size_t spatial_slack, hairobb__split *best)
+                               float box_per_area, float *area, size_t spatial_slack, hairobb__split *best)
 {
-    float cmin[3], cmax[3], bmin[3], bmax[3];
+    float box_cost;
+    float bmin[3], bmax[3];
+    const float *boxes = frame ? b->frame_boxes : b->world_boxes;
+    hairobb__b4 cmin = hairobb__b4_set1(FLT_MAX), cmax = hairobb__b4_set1(-FLT_MAX), half = hairobb__b4_set1(0.5f);
+    hairobb__b4 box_min = cmin, box_max = cmax;
+    hairobb__frame_prep prep;
     size_t i;
     /* fewer bins than references only wastes sweeps */
     int axis, bins = r->end - r->begin < HAIROBB__BINS ? (int)(r->end - r->begin) : HAIROBB__BINS;
-    if (frame) {
-        for (i = r->begin; i < r->end; ++i) {
-            float scratch[16];
-            hairobb__segment_box(hairobb__ref_points(b, i, scratch), frame, NULL, NULL, b->frame_boxes + 6 * i, b->frame_boxes + 6 * i + 3);
-        }
-    }
-    hairobb__box_empty(cmin, cmax);
-    hairobb__box_empty(bmin, bmax);
+    if (frame) hairobb__prepare_frame(frame, &prep);
+    /* the boxes (in a frame: computed here, for the binning and for
+       hairobb__partition) and the bounds of their centroids, in one pass */
     for (i = r->begin; i < r->end; ++i) {
-        float lower[3], upper[3], c[3];
-        int k;
-        hairobb__box_at(b, frame, i, lower, upper);
-        for (k = 0; k < 3; ++k) c[k] = 0.5f * (lower[k] + upper[k]);
-        hairobb__box_grow(cmin, cmax, c, c);
-        hairobb__box_grow(bmin, bmax, lower, upper);
+        hairobb__b4 lower, upper, c;
+        if (frame) {
+            float scratch[16];
+            hairobb__segment_box_v4(hairobb__ref_points(b, i, scratch), &prep, NULL, NULL, &lower, &upper);
+            hairobb__b4_store3(b->frame_boxes + 6 * i, lower);
+            hairobb__b4_store3(b->frame_boxes + 6 * i + 3, upper);
+        } else {
+            lower = hairobb__b4_load4(boxes + 6 * i);
+            upper = hairobb__b4_load_upper(boxes + 6 * i);
+        }
+        c = hairobb__b4_mul(half, hairobb__b4_add(lower, upper));
+        cmin = hairobb__b4_min(cmin, c);
+        cmax = hairobb__b4_max(cmax, c);
+        box_min = hairobb__b4_min(box_min, lower);
+        box_max = hairobb__b4_max(box_max, upper);
     }
+    hairobb__b4_store3(bmin, box_min);
+    hairobb__b4_store3(bmax, box_max);
+    if (!frame) *area = hairobb__half_area(bmin, bmax);
+    box_cost = box_per_area * *area;
     {
         /* object binning: one pass over the references for all three axes */
-        float bin_lower[3][HAIROBB__BINS][3], bin_upper[3][HAIROBB__BINS][3], scale[3];
-        size_t bin_count[3][HAIROBB__BINS];
+        hairobb__b4 bin_lower[3][HAIROBB__BINS], bin_upper[3][HAIROBB__BINS], scale;
+        uint32_t bin_count[HAIROBB__BINS][4];   /* [bin][axis]; a range holds at most 2^32-1 references */
+        float scales[3], origins[3];
         int bin;
+        memset(bin_count, 0, (size_t)bins * sizeof bin_count[0]);
         for (axis = 0; axis < 3; ++axis) {
-            scale[axis] = hairobb__bin_scale(bins, cmax[axis] - cmin[axis]);
+            origins[axis] = hairobb__b4_lane(cmin, axis);
+            scales[axis] = hairobb__bin_scale(bins, hairobb__b4_lane(cmax, axis) - origins[axis]);
             for (bin = 0; bin < bins; ++bin) {
-                hairobb__box_empty(bin_lower[axis][bin], bin_upper[axis][bin]);
-                bin_count[axis][bin] = 0;
+                bin_lower[axis][bin] = hairobb__b4_set1(FLT_MAX);
+                bin_upper[axis][bin] = hairobb__b4_set1(-FLT_MAX);
             }
         }
+        scale = hairobb__b4_set3(scales);
         for (i = r->begin; i < r->end; ++i) {
-            float lower[3], upper[3];
-            hairobb__box_at(b, frame, i, lower, upper);
-            for (axis = 0; axis < 3; ++axis) {
-                bin = hairobb__bin_of(0.5f * (lower[axis] + upper[axis]), cmin[axis], scale[axis]);
-                hairobb__box_grow(bin_lower[axis][bin], bin_upper[axis][bin], lower, upper);
-                bin_count[axis][bin]++;
-            }
+            hairobb__b4 lower = hairobb__b4_load4(boxes + 6 * i), upper = hairobb__b4_load_upper(boxes + 6 * i);
+            int at[4];
+            hairobb__b4_bins(hairobb__b4_mul(hairobb__b4_sub(hairobb__b4_mul(half, hairobb__b4_add(lower, upper)), cmin), scale), at);
+#define HAIROBB__BIN_INTO(axis) \
+            bin_lower[axis][at[axis]] = hairobb__b4_min(bin_lower[axis][at[axis]], lower); \
+            bin_upper[axis][at[axis]] = hairobb__b4_max(bin_upper[axis][at[axis]], upper); \
+            bin_count[at[axis]][axis]++;
+            HAIROBB__BIN_INTO(0)
+            HAIROBB__BIN_INTO(1)
+            HAIROBB__BIN_INTO(2)
+#undef HAIROBB__BIN_INTO
         }
-        for (axis = 0; axis < 3; ++axis)
-            if (scale[axis] > 0.0f)
-                hairobb__sweep_bins(bins, (const float (*)[3])bin_lower[axis], (const float (*)[3])bin_upper[axis],
-                                    bin_count[axis], bin_count[axis], box_cost, HAIROBB__SPLIT_OBJECT, frame, axis,
-                                    cmin[axis], scale[axis], best);
+#if HAIROBB__SSE
+        if (r->end - r->begin <= 0x7fffffffu) {
+            hairobb__sweep_objects(bins, (const hairobb__b4 (*)[HAIROBB__BINS])bin_lower,
+                                   (const hairobb__b4 (*)[HAIROBB__BINS])bin_upper, (const uint32_t (*)[4])bin_count,
+                                   box_cost, frame, origins, scales, best);
+        } else
+#endif
+        {
+            for (axis = 0; axis < 3; ++axis)
+                if (scales[axis] > 0.0f)
+                    hairobb__sweep_object(bins, bin_lower[axis], bin_upper[axis], (const uint32_t (*)[4])bin_count,
+                                          box_cost, frame, axis, origins[axis], scales[axis], best);
+        }
     }
     for (axis = 0; axis < 3 && spatial_slack > 0; ++axis) {
         float bin_lower[HAIROBB__BINS][3], bin_upper[HAIROBB__BINS][3];
@@ -1543,7 +1817,8 @@ static int hairobb__cluster_of(const hairobb__builder *b, size_t i, const float 
 static void hairobb__cluster_split(const hairobb__builder *b, const hairobb__range *r, float box_cost, hairobb__split *best)
 {
     size_t count = r->end - r->begin, step = count > HAIROBB__SAMPLE ? count / HAIROBB__SAMPLE : 1, i, n[2] = {0, 0};
-    float direction[2][3], frame[2][9], lower[2][3], upper[2][3], best_dot = 0.9f, cost;
+    float direction[2][3], frame[9], lower[2][3], upper[2][3], best_dot = 0.9f, cost;
+    hairobb__frame_prep prep[2];
     int found = 0, c;
     if (!hairobb__ref_direction(b, r->begin + count / 2, direction[0])) return;
     for (i = r->begin; i < r->end; i += step) {
@@ -1554,13 +1829,14 @@ static void hairobb__cluster_split(const hairobb__builder *b, const hairobb__ran
     }
     if (!found) return;     /* all within ~25 degrees: hair-space binning covers it */
     for (c = 0; c < 2; ++c) {
-        hairobb__frame_from_direction(direction[c], frame[c]);
+        hairobb__frame_from_direction(direction[c], frame);
+        hairobb__prepare_frame(frame, &prep[c]);
         hairobb__box_empty(lower[c], upper[c]);
     }
     for (i = r->begin; i < r->end; ++i) {
         float lo[3], hi[3];
         c = hairobb__cluster_of(b, i, (const float (*)[3])direction);
-        hairobb__prim_box(b, i, frame[c], lo, hi);
+        hairobb__prim_box(b, i, &prep[c], lo, hi);
         hairobb__box_grow(lower[c], upper[c], lo, hi);
         n[c]++;
     }
@@ -1578,16 +1854,12 @@ static void hairobb__cluster_split(const hairobb__builder *b, const hairobb__ran
     }
 }
 
-static void hairobb__range_box(const hairobb__builder *b, size_t begin, size_t end, const float *frame,
-                               float lower[3], float upper[3])
+/* World box of the references at positions [begin, end). */
+static void hairobb__range_box(const hairobb__builder *b, size_t begin, size_t end, float lower[3], float upper[3])
 {
     size_t i;
     hairobb__box_empty(lower, upper);
-    for (i = begin; i < end; ++i) {
-        float lo[3], hi[3];
-        hairobb__prim_box(b, i, frame, lo, hi);
-        hairobb__box_grow(lower, upper, lo, hi);
-    }
+    for (i = begin; i < end; ++i) hairobb__box_grow(lower, upper, b->world_boxes + 6 * i, b->world_boxes + 6 * i + 3);
 }
 
 /* The padded box of the range in frame around centre: what a node stores. */
@@ -1597,14 +1869,20 @@ static void hairobb__node_box(const hairobb__builder *b, const hairobb__range *r
     size_t i;
     float norms[3];
     int k;
+    hairobb__frame_prep prep;
+    hairobb__b4 box_lower = hairobb__b4_set1(FLT_MAX), box_upper = hairobb__b4_set1(-FLT_MAX);
+    hairobb__prepare_frame(frame, &prep);
     for (k = 0; k < 3; ++k)     /* rounded up: the radius must not shrink */
         norms[k] = sqrtf(hairobb__dot3(frame + 3 * k, frame + 3 * k)) * (1.0f + 1.0f / 1048576.0f);
-    hairobb__box_empty(lower, upper);
     for (i = r->begin; i < r->end; ++i) {
-        float lo[3], hi[3], scratch[16];
-        hairobb__segment_box(hairobb__ref_points(b, i, scratch), frame, centre, norms, lo, hi);
-        hairobb__box_grow(lower, upper, lo, hi);
+        float scratch[16];
+        hairobb__b4 lo, hi;
+        hairobb__segment_box_v4(hairobb__ref_points(b, i, scratch), &prep, centre, norms, &lo, &hi);
+        box_lower = hairobb__b4_min(box_lower, lo);
+        box_upper = hairobb__b4_max(box_upper, hi);
     }
+    hairobb__b4_store3(lower, box_lower);
+    hairobb__b4_store3(upper, box_upper);
     hairobb__pad_box(lower, upper);
 }
 
@@ -1615,7 +1893,7 @@ static void hairobb__range_centre(const hairobb__builder *b, const hairobb__rang
     int k, i;
     hairobb__box_empty(lower, upper);
     for (i = 0; i < range_count; ++i) {
-        hairobb__range_box(b, ranges[i].begin, ranges[i].end, NULL, lo, hi);
+        hairobb__range_box(b, ranges[i].begin, ranges[i].end, lo, hi);
         hairobb__box_grow(lower, upper, lo, hi);
     }
     for (k = 0; k < 3; ++k) centre[k] = 0.5f * lower[k] + 0.5f * upper[k];
@@ -1626,21 +1904,24 @@ static int hairobb__at_top(const hairobb__builder *b, size_t count) { return b->
 
 /* The cheapest split the policy and the subtree's tries allow; a median split
    when none is found (all centroids equal) or below the SAH depth. */
+/* hair_space: the frame hairobb__choose_hair_space(b, r, 1, 0, .) gives, if
+   known (NULL: chosen here). */
 static void hairobb__find_split(const hairobb__builder *b, const hairobb__range *r, unsigned depth,
-                                unsigned tries, hairobb__split *best)
+                                unsigned tries, const float *hair_space, hairobb__split *best)
 {
-    float lower[3], upper[3], area;
+    float lower[3], upper[3], area = 0.0f;
     size_t slack = (tries & HAIROBB__TRY_SPATIAL) ? r->cap - r->end : 0;
-    hairobb__range_box(b, r->begin, r->end, NULL, lower, upper);
-    area = hairobb__half_area(lower, upper);
+    int world_binning = depth < HAIROBB__SAH_DEPTH && b->policy != HAIROBB_NODES_OBB_ONLY;
+    if (!world_binning) {   /* else the binning's first pass finds the same box */
+        hairobb__range_box(b, r->begin, r->end, lower, upper);
+        area = hairobb__half_area(lower, upper);
+    }
     best->cost = FLT_MAX;
     best->kind = HAIROBB__SPLIT_MEDIAN;
     best->heuristic = 0;
     best->hair_space = 0;
-    best->parent_area = area;
     if (depth < HAIROBB__SAH_DEPTH) {
-        if (b->policy != HAIROBB_NODES_OBB_ONLY)
-            hairobb__bin_split(b, r, NULL, 2.0f * HAIROBB__COST_AABB * area, slack, best);
+        if (world_binning) hairobb__bin_split(b, r, NULL, 2.0f * HAIROBB__COST_AABB, &area, slack, best);
         /* a mixed tree's top (above the tasks) splits in world space only: hair
            is sorted by place there, and that part of the build is not spread
            over threads (combed, straight.hair: 10% fewer build instructions,
@@ -1648,18 +1929,20 @@ static void hairobb__find_split(const hairobb__builder *b, const hairobb__range 
         if (b->policy != HAIROBB_NODES_AABB_ONLY && (tries & HAIROBB__TRY_HAIR_SPACE) &&
             (b->policy == HAIROBB_NODES_OBB_ONLY || !hairobb__at_top(b, r->end - r->begin))) {
             float frame[9];
-            hairobb__choose_hair_space(b, r, 1, 0, frame);
-            hairobb__bin_split(b, r, frame, 2.0f * HAIROBB__COST_OBB * area, slack, best);
+            if (hair_space) memcpy(frame, hair_space, sizeof frame);
+            else hairobb__choose_hair_space(b, r, 1, 0, frame);
+            hairobb__bin_split(b, r, frame, 2.0f * HAIROBB__COST_OBB, &area, slack, best);
         }
         if (b->policy != HAIROBB_NODES_AABB_ONLY && (tries & HAIROBB__TRY_CLUSTER))
             hairobb__cluster_split(b, r, 2.0f * HAIROBB__COST_OBB * area, best);
     }
+    best->parent_area = area;
     if (best->kind == HAIROBB__SPLIT_MEDIAN) {
         size_t half = (r->end - r->begin) / 2;
         best->cost = FLT_MAX;
-        hairobb__range_box(b, r->begin, r->begin + half, NULL, lower, upper);
+        hairobb__range_box(b, r->begin, r->begin + half, lower, upper);
         best->area_left = hairobb__half_area(lower, upper);
-        hairobb__range_box(b, r->begin + half, r->end, NULL, lower, upper);
+        hairobb__range_box(b, r->begin + half, r->end, lower, upper);
         best->area_right = hairobb__half_area(lower, upper);
     }
 }
@@ -1680,27 +1963,23 @@ static void hairobb__update_tries(hairobb__tries *t, const hairobb__split *split
     }
 }
 
-static void hairobb__copy_position(hairobb__builder *b, size_t to, size_t from)
-{
-    b->ids[to] = b->ids[from];
-    memcpy(b->ranges + 2 * to, b->ranges + 2 * from, 2 * sizeof(float));
-    memcpy(b->world_boxes + 6 * to, b->world_boxes + 6 * from, 6 * sizeof(float));
-}
-
-/* Swaps two references, with their boxes in the frame last binned. */
-static void hairobb__swap_positions(hairobb__builder *b, size_t i, size_t j)
+/* Swaps the references at positions i and j. Boxes in the frame last
+   binned are read only by the partition's test of the position it looks at
+   next: with frame_box, i (looked at next) gets j's; the rest are stale
+   after the partition and are not moved. */
+HAIROBB__INLINE void hairobb__swap_positions(hairobb__builder *b, size_t i, size_t j, int frame_box)
 {
     uint32_t id = b->ids[i];
-    float range[2], box[6], frame_box[6];
+    float range[2], box[6];
     memcpy(range, b->ranges + 2 * i, sizeof range);
     memcpy(box, b->world_boxes + 6 * i, sizeof box);
-    memcpy(frame_box, b->frame_boxes + 6 * i, sizeof frame_box);
-    hairobb__copy_position(b, i, j);
-    memcpy(b->frame_boxes + 6 * i, b->frame_boxes + 6 * j, sizeof frame_box);
+    b->ids[i] = b->ids[j];
+    memcpy(b->ranges + 2 * i, b->ranges + 2 * j, sizeof range);
+    memcpy(b->world_boxes + 6 * i, b->world_boxes + 6 * j, sizeof box);
     b->ids[j] = id;
     memcpy(b->ranges + 2 * j, range, sizeof range);
     memcpy(b->world_boxes + 6 * j, box, sizeof box);
-    memcpy(b->frame_boxes + 6 * j, frame_box, sizeof frame_box);
+    if (frame_box) memcpy(b->frame_boxes + 6 * i, b->frame_boxes + 6 * j, sizeof box);
 }
 
 static void hairobb__set_range(hairobb__builder *b, size_t i, float u0, float u1)
@@ -1716,16 +1995,15 @@ static void hairobb__set_range(hairobb__builder *b, size_t i, float u0, float u1
    plane. A hair-space split was just binned: its boxes are in frame_boxes. */
 static int hairobb__side(const hairobb__builder *b, size_t i, const hairobb__split *split)
 {
-    float lower[3], upper[3];
+    const float *box;
     if (split->kind == HAIROBB__SPLIT_CLUSTER) return hairobb__cluster_of(b, i, split->direction);
-    hairobb__box_at(b, split->hair_space ? split->frame : NULL, i, lower, upper);
+    box = (split->hair_space ? b->frame_boxes : b->world_boxes) + 6 * i + split->axis;   /* box[0] lower, box[3] upper */
     if (split->kind == HAIROBB__SPLIT_SPATIAL) {
-        int first = hairobb__bin_of(lower[split->axis], split->bin_origin, split->bin_scale);
-        int last = hairobb__bin_of(upper[split->axis], split->bin_origin, split->bin_scale);
+        int first = hairobb__bin_of(box[0], split->bin_origin, split->bin_scale);
+        int last = hairobb__bin_of(box[3], split->bin_origin, split->bin_scale);
         return last <= split->last_left_bin ? 0 : first > split->last_left_bin ? 1 : 2;
     }
-    return hairobb__bin_of(0.5f * (lower[split->axis] + upper[split->axis]), split->bin_origin, split->bin_scale)
-           > split->last_left_bin;
+    return hairobb__bin_of(0.5f * (box[0] + box[3]), split->bin_origin, split->bin_scale) > split->last_left_bin;
 }
 
 /* Clips the straddling reference at position i at the split plane: i keeps
@@ -1784,11 +2062,29 @@ static void hairobb__partition(hairobb__builder *b, const hairobb__range *r, con
         lo = mid;
     } else {
         /* three-way: [begin, lo) left, [lo, mid) straddling, [hi, end) right */
+        int frame_box = split->hair_space && split->kind != HAIROBB__SPLIT_CLUSTER;
+        if (split->kind == HAIROBB__SPLIT_OBJECT) {
+            /* hairobb__side's object test written out: no reference straddles, lo stays mid */
+            const float *box = (frame_box ? b->frame_boxes : b->world_boxes) + split->axis;
+            while (mid < hi) {
+                if (hairobb__bin_of(0.5f * (box[6 * mid] + box[6 * mid + 3]), split->bin_origin, split->bin_scale) <=
+                    split->last_left_bin)
+                    mid++;
+                else if (mid < --hi)
+                    hairobb__swap_positions(b, mid, hi, frame_box);
+            }
+            lo = mid;
+        }
         while (mid < hi) {
             int side = hairobb__side(b, mid, split);
-            if (side == 0) hairobb__swap_positions(b, lo++, mid++);
-            else if (side == 2) mid++;
-            else hairobb__swap_positions(b, mid, --hi);
+            if (side == 0) {
+                if (lo < mid) hairobb__swap_positions(b, lo, mid, 0);
+                lo++, mid++;
+            } else if (side == 2) {
+                mid++;
+            } else if (mid < --hi) {
+                hairobb__swap_positions(b, mid, hi, frame_box);
+            }
         }
         /* clip the straddling references: the left part stays, the right part
            is appended after the right side */
@@ -1797,7 +2093,7 @@ static void hairobb__partition(hairobb__builder *b, const hairobb__range *r, con
             HAIROBB_ASSERT(end < r->cap);
             side = hairobb__clip(b, i, end, split);
             if (side < 0) continue;                 /* kept whole, on the left */
-            if (side == 1) hairobb__swap_positions(b, i, end);
+            if (side == 1) hairobb__swap_positions(b, i, end, 0);
             ++end;
         }
         lo = mid;
@@ -1934,7 +2230,8 @@ static void hairobb__store_compressed(float step_out[3], signed char (*lower_byt
     }
 }
 
-static uint64_t hairobb__build_range(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries);
+static uint64_t hairobb__build_range(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries,
+                                     const float *hair_space);
 static uint64_t hairobb__add_task(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries);
 
 static size_t hairobb__node_size(unsigned node_type)
@@ -1958,6 +2255,9 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
 {
     hairobb__child children[HAIROBB__W];
     hairobb__range ranges[HAIROBB__W];
+    /* per-child frames: the sampled sums also answer the child's own split */
+    float hints[HAIROBB__W][9];
+    const float *hint[HAIROBB__W];
     int count = 1, use_obb = b->policy == HAIROBB_NODES_OBB_ONLY, i;
     unsigned node_type;
     size_t offset, node_size, child_offset;
@@ -1973,7 +2273,7 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
         if (pick < 0 || count == HAIROBB__W) break;
         if (count > 1) {
             size_t n = children[pick].range.end - children[pick].range.begin;
-            hairobb__find_split(b, &children[pick].range, depth + 1, tries.enabled, &split);
+            hairobb__find_split(b, &children[pick].range, depth + 1, tries.enabled, NULL, &split);
             if (!hairobb__at_top(b, n)) hairobb__update_tries(&tries, &split);
             if (n <= b->max_leaf && hairobb__leaf_cost(n, split.parent_area) <= split.cost) {
                 children[pick].final_leaf = 1;
@@ -2002,7 +2302,7 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
     if (b->error != HAIROBB_OK) return HAIROBB__REF_EMPTY;
     if (use_obb) b->stats.obb_nodes++; else b->stats.aabb_nodes++;
     /* boxes first: building the children moves references within their ranges */
-    for (i = 0; i < count; ++i) ranges[i] = children[i].range;
+    for (i = 0; i < count; ++i) { ranges[i] = children[i].range; hint[i] = NULL; }
 
     if (node_type == HAIROBB__REF_OBB) {
         hairobb__obb_node *node = HAIROBB__CAST(hairobb__obb_node *, (void *)(b->nodes + offset));
@@ -2011,7 +2311,8 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
         for (i = 0; i < HAIROBB__W; ++i) {
             float frame[9], lower[3], upper[3];
             if (i < count) {
-                hairobb__choose_hair_space(b, &ranges[i], 1, 1, frame);
+                hairobb__choose_hair_spaces(b, &ranges[i], 1, 1, frame, hints[i]);
+                hint[i] = hints[i];
                 hairobb__node_box(b, &ranges[i], frame, node->centre, lower, upper);
             } else {
                 /* an empty child maps everything to (2,2,2): never inside the unit cube */
@@ -2031,7 +2332,8 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
             float frame[9];
             signed char q[9];
             int k;
-            hairobb__choose_hair_space(b, &ranges[i], 1, 1, frame);
+            hairobb__choose_hair_spaces(b, &ranges[i], 1, 1, frame, hints[i]);
+            hint[i] = hints[i];
             for (k = 0; k < 9; ++k) node->rotation[k][i] = q[k] = (signed char)lrintf(frame[k] * 127.0f);
             hairobb__decode_rotation(q, frame);
             hairobb__node_box(b, &ranges[i], frame, node->centre, lower[i], upper[i]);
@@ -2096,7 +2398,7 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
         if (children[i].final_leaf || n == 1 || (count == HAIROBB__W && n <= HAIROBB__FULL_NODE_LEAF && n <= b->max_leaf))
             ref = hairobb__make_leaf(b, c, depth + 1);
         else
-            ref = hairobb__build_range(b, c, depth + 1, tries);
+            ref = hairobb__build_range(b, c, depth + 1, tries, hint[i]);
         if (b->error != HAIROBB_OK) return HAIROBB__REF_EMPTY;
         /* node memory may have moved: child[] at its offset in the node */
         memcpy(b->nodes + offset + child_offset + i * sizeof(uint64_t), &ref, sizeof ref);
@@ -2124,13 +2426,15 @@ static uint64_t hairobb__add_task(hairobb__builder *b, const hairobb__range *r, 
     return ((uint64_t)b->task_count++ << 4) | HAIROBB__REF_TASK;
 }
 
-static uint64_t hairobb__build_range(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries)
+/* hair_space: see hairobb__find_split */
+static uint64_t hairobb__build_range(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries,
+                                     const float *hair_space)
 {
     hairobb__split split;
     size_t n = r->end - r->begin;
     if (n == 1) return hairobb__make_leaf(b, r, depth);
     if (n <= b->task_limit) return hairobb__add_task(b, r, depth, tries);
-    hairobb__find_split(b, r, depth, tries.enabled, &split);
+    hairobb__find_split(b, r, depth, tries.enabled, hair_space, &split);
     if (!hairobb__at_top(b, n)) hairobb__update_tries(&tries, &split);
     if (n <= b->max_leaf && hairobb__leaf_cost(n, split.parent_area) <= split.cost)
         return hairobb__make_leaf(b, r, depth);
@@ -2150,7 +2454,7 @@ static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task)
     local.task_limit = 0;           /* no tasks within a task; no progress calls */
     local.tasks = NULL;
     local.task_count = local.task_capacity = 0;
-    task->root = hairobb__build_range(&local, &task->range, task->depth, task->tries);
+    task->root = hairobb__build_range(&local, &task->range, task->depth, task->tries, NULL);
     task->node_allocation = local.node_allocation;
     task->nodes = local.nodes;
     task->node_bytes = local.node_bytes;
@@ -2456,7 +2760,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     /* the top of the tree here, subtrees of at most task_limit references as
        tasks; the limit depends on the input alone (same tree on any thread count) */
     b.task_limit = segment_count / HAIROBB__TASKS > HAIROBB__TASK_MIN ? segment_count / HAIROBB__TASKS : HAIROBB__TASK_MIN;
-    bvh->root = hairobb__build_range(&b, &root, 0, tries);
+    bvh->root = hairobb__build_range(&b, &root, 0, tries, NULL);
     if (b.error == HAIROBB_OK) hairobb__run_tasks(&b, opt.threads, opt.parallel_for, opt.parallel_for_user);
     if (b.error == HAIROBB_OK) hairobb__gather_tasks(&b);
     if (b.error != HAIROBB_OK) goto failed;
