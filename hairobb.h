@@ -3347,15 +3347,16 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
     for (;;) {
         /* the default layout's types first: a compare each */
         unsigned type = HAIROBB__REF_TYPE(ref);
-        const void *node = bvh->nodes + (ref & ~(uint64_t)15);
+        const void *node;   /* set for inner nodes only: a one-leaf tree has no node memory */
         const uint64_t *child;
         float dist[HAIROBB__W];
         int bits, i;
         if (type == HAIROBB__REF_QOBB_PER_CHILD) {
+            node = bvh->nodes + (ref & ~(uint64_t)15);
             bits = hairobb__intersect_compressed_obb_node(HAIROBB__CAST(const hairobb__compressed_obb_node *, node), rs, dist);
             child = HAIROBB__CAST(const hairobb__compressed_obb_node *, node)->child;
         } else if (type == HAIROBB__REF_AABB) {
-            const hairobb__aabb_node *aabb = HAIROBB__CAST(const hairobb__aabb_node *, node);
+            const hairobb__aabb_node *aabb = HAIROBB__CAST(const hairobb__aabb_node *, (const void *)(bvh->nodes + (ref & ~(uint64_t)15)));
             bits = hairobb__intersect_boxes(aabb->lower[0], &rs->world, rs, dist);
             child = aabb->child;
         } else if (type == HAIROBB__REF_LEAF) {
@@ -3370,13 +3371,16 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
             bits = 0;
             child = NULL;
         } else if (type == HAIROBB__REF_QAABB || type == HAIROBB__REF_QOBB) {
+            node = bvh->nodes + (ref & ~(uint64_t)15);
             bits = hairobb__intersect_compressed_node(HAIROBB__CAST(const hairobb__compressed_node *, node),
                                                       type == HAIROBB__REF_QOBB, rs, dist);
             child = HAIROBB__CAST(const hairobb__compressed_node *, node)->child;
         } else if (type == HAIROBB__REF_ROTATED) {
+            node = bvh->nodes + (ref & ~(uint64_t)15);
             bits = hairobb__intersect_rotated_node(HAIROBB__CAST(const hairobb__rotated_node *, node), rs, dist);
             child = HAIROBB__CAST(const hairobb__rotated_node *, node)->child;
         } else {
+            node = bvh->nodes + (ref & ~(uint64_t)15);
             bits = hairobb__intersect_obb_node(HAIROBB__CAST(const hairobb__obb_node *, node), rs, dist);
             child = HAIROBB__CAST(const hairobb__obb_node *, node)->child;
         }
