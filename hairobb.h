@@ -1437,7 +1437,7 @@ static void hairobb__choose_hair_spaces(const hairobb__builder *b, const hairobb
     unsigned c, candidates, n = 0;
     float frames[HAIROBB__MAX_CANDIDATES][9], areas[HAIROBB__MAX_CANDIDATES], world_area = 0.0f, best_area;
     hairobb__frame_prep preps[HAIROBB__MAX_CANDIDATES];
-    int i;
+    int i, best = -1;
     for (i = 0; i < range_count; ++i) count += ranges[i].end - ranges[i].begin;
     candidates = b->candidates < count ? b->candidates : (unsigned)count;
     for (c = 0; c < candidates; ++c) {
@@ -1461,16 +1461,16 @@ static void hairobb__choose_hair_spaces(const hairobb__builder *b, const hairobb
             areas[c] += hairobb__b4_half_area(lower, upper);
         }
     }
-    hairobb__identity_frame(best_frame);
-    best_area = allow_identity ? world_area : FLT_MAX;
+    /* the first cheapest candidate; it beats the world axes only if cheaper */
+    best_area = FLT_MAX;
     for (c = 0; c < n; ++c)
-        if (areas[c] < best_area) { best_area = areas[c]; memcpy(best_frame, frames[c], sizeof frames[c]); }
+        if (areas[c] < best_area) { best_area = areas[c]; best = (int)c; }
     if (candidate_frame) {
-        hairobb__identity_frame(candidate_frame);
-        best_area = FLT_MAX;
-        for (c = 0; c < n; ++c)
-            if (areas[c] < best_area) { best_area = areas[c]; memcpy(candidate_frame, frames[c], sizeof frames[c]); }
+        if (best >= 0) memcpy(candidate_frame, frames[best], sizeof frames[best]);
+        else hairobb__identity_frame(candidate_frame);
     }
+    if (best >= 0 && (!allow_identity || best_area < world_area)) memcpy(best_frame, frames[best], sizeof frames[best]);
+    else hairobb__identity_frame(best_frame);
 }
 
 static void hairobb__choose_hair_space(const hairobb__builder *b, const hairobb__range *ranges, int range_count,
@@ -1562,38 +1562,6 @@ static void hairobb__sweep_bins(int bins, const float bin_lower[][3], const floa
     }
 }
 
-/* hairobb__sweep_bins for object bins (entries = exits = count) on boxes
-   in lanes, the same floats in the same order. */
-static void hairobb__sweep_object(int bins, const hairobb__b4 *bin_lower, const hairobb__b4 *bin_upper,
-                                  const uint32_t (*count)[4], float box_cost, const float *frame, int axis, float origin,
-                                  float scale, hairobb__split *best)
-{
-    float right_area[HAIROBB__BINS];
-    uint32_t right_count[HAIROBB__BINS + 1], left_count = 0;   /* converted to float as the size_t counts were */
-    hairobb__b4 lo = hairobb__b4_set1(FLT_MAX), hi = hairobb__b4_set1(-FLT_MAX);
-    int bin;
-    right_count[bins] = 0;
-    for (bin = bins - 1; bin > 0; --bin) {
-        lo = hairobb__b4_min(lo, bin_lower[bin]);
-        hi = hairobb__b4_max(hi, bin_upper[bin]);
-        right_count[bin] = count[bin][axis] + right_count[bin + 1];
-        right_area[bin] = right_count[bin] ? hairobb__b4_half_area(lo, hi) : 0.0f;
-    }
-    lo = hairobb__b4_set1(FLT_MAX);
-    hi = hairobb__b4_set1(-FLT_MAX);
-    for (bin = 0; bin < bins - 1; ++bin) {
-        float cost, left_area;
-        lo = hairobb__b4_min(lo, bin_lower[bin]);
-        hi = hairobb__b4_max(hi, bin_upper[bin]);
-        left_count += count[bin][axis];
-        if (left_count == 0 || right_count[bin + 1] == 0) continue;
-        left_area = hairobb__b4_half_area(lo, hi);
-        cost = box_cost + HAIROBB__COST_SEGMENT * (left_area * (float)left_count + right_area[bin + 1] * (float)right_count[bin + 1]);
-        if (cost < best->cost)
-            hairobb__take_split(best, cost, HAIROBB__SPLIT_OBJECT, frame, axis, origin, scale, bin, left_area, right_area[bin + 1]);
-    }
-}
-
 #if HAIROBB__SSE
 /* (dx dy + dy dz) + dz dx of boxes with one axis per vector (lanes: boxes) */
 HAIROBB__INLINE __m128 hairobb__half_areas(const __m128 lower[3], const __m128 upper[3])
@@ -1602,7 +1570,7 @@ HAIROBB__INLINE __m128 hairobb__half_areas(const __m128 lower[3], const __m128 u
     return _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dy), _mm_mul_ps(dy, dz)), _mm_mul_ps(dz, dx));
 }
 
-/* The three axes' hairobb__sweep_object at once, lane = axis (bins
+/* The three axes' object sweeps (hairobb__sweep_bins) at once, lane = axis (bins
    transposed): the same floats. Each lane keeps its first cheapest plane,
    then the axes in order beat *best or not, as one sweep after the other
    would have left it. Counts below 2^31 (int lanes). */
@@ -1748,10 +1716,18 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
         } else
 #endif
         {
-            for (axis = 0; axis < 3; ++axis)
-                if (scales[axis] > 0.0f)
-                    hairobb__sweep_object(bins, bin_lower[axis], bin_upper[axis], (const uint32_t (*)[4])bin_count,
-                                          box_cost, frame, axis, origins[axis], scales[axis], best);
+            for (axis = 0; axis < 3; ++axis) {
+                float lower[HAIROBB__BINS][3], upper[HAIROBB__BINS][3];
+                size_t counts[HAIROBB__BINS];
+                if (!(scales[axis] > 0.0f)) continue;
+                for (bin = 0; bin < bins; ++bin) {
+                    hairobb__b4_store3(lower[bin], bin_lower[axis][bin]);
+                    hairobb__b4_store3(upper[bin], bin_upper[axis][bin]);
+                    counts[bin] = bin_count[bin][axis];
+                }
+                hairobb__sweep_bins(bins, (const float (*)[3])lower, (const float (*)[3])upper, counts, counts, box_cost,
+                                    HAIROBB__SPLIT_OBJECT, frame, axis, origins[axis], scales[axis], best);
+            }
         }
     }
     for (axis = 0; axis < 3 && spatial_slack > 0; ++axis) {
