@@ -38,7 +38,7 @@ FUZZCC    = clang
 FUZZ      = -std=c99 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -ffp-contract=off -I.
 FUZZ_SECONDS ?= 1800
 
-.PHONY: all test check deps compile-matrix bench profile examples clean fuzz
+.PHONY: all test check deps compile-matrix bench profile examples clean fuzz tree-hashes
 all: $(TESTS) $(SANITIZED) $(B)/bench examples
 
 deps:
@@ -146,6 +146,19 @@ BENCH_FLAGS_bench_counted = -DBENCH_COUNTS
 BENCH_FLAGS_bench_profile = -fno-pie -no-pie
 $(B)/bench $(B)/bench_counted $(B)/bench_profile: bench/bench.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $(BENCH_FLAGS_$(@F)) $< -o $@ $(EMBREE) -lpthread $(LIBS)
+
+# Same trees: a hash of each tree (scenes x option sets x 1 and 2 build
+# threads, bench/tree_hash.c) from the default 8-wide build, 4-wide and plain
+# C; `make tree-hashes` writes them to build/tree-hashes.txt (diff it against
+# bench/results/tree-hashes-*.txt). --memory: peak transient build bytes.
+TREE_HASH_FLAGS_tree_hash       =
+TREE_HASH_FLAGS_tree_hash_w4    = -DHAIROBB_NODE_WIDTH=4
+TREE_HASH_FLAGS_tree_hash_plain = -DHAIROBB_NO_SIMD
+$(B)/tree_hash $(B)/tree_hash_w4 $(B)/tree_hash_plain: bench/tree_hash.c bench/alloc_meter.h hairobb.h tests/scenes.h tests/test_data.h | $(B)
+	$(CC) $(BASE) $(ARCH) $(TREE_HASH_FLAGS_$(@F)) $< -o $@ $(LIBS)
+tree-hashes: $(B)/tree_hash $(B)/tree_hash_w4 $(B)/tree_hash_plain
+	@for p in tree_hash tree_hash_w4 tree_hash_plain; do echo "== $$p"; $(B)/$$p || exit 1; done > $(B)/tree-hashes.txt
+	@echo "tree hashes: $(B)/tree-hashes.txt"
 
 # The header must compile clean as users compile it: gcc and clang, C99 and
 # C++11, -Werror, static, plain C.

@@ -42,6 +42,15 @@
      holds). They must stay alive and unchanged until hairobb_free; to change
      the hair, build again. (Other curve bases, see `basis`, are copied.)
 
+     BUILD MEMORY: beyond the BVH it returns, a build holds 28 bytes a
+     segment while it runs (ids and world boxes; 36 a reference with
+     spatial splits, whose budget adds spatial_split_budget references a
+     segment), 24 bytes a reference of the subtree each thread builds, and
+     the subtrees' nodes, which it holds twice at the end as it copies them
+     into one block. Measured (bench, README) on combed fur, 8-wide
+     defaults: 32-34 bytes a segment beyond the BVH at 200k-10M segments,
+     42 with spatial splits.
+
    THE SURFACE
      Each segment is a ray-facing ribbon (Embree's "flat" curve). In ray space
      (origin at the ray origin, z along the normalised direction) let P(u) and
@@ -1318,9 +1327,13 @@ typedef struct hairobb__builder {
     const float *vertices;
     const uint32_t *indices;
     uint32_t *ids;                    /* segment of each position */
-    float *ranges;                    /* u0, u1 per position */
+    float *ranges;                    /* u0, u1 per position; NULL without spatial splits: all [0, 1] */
     float *world_boxes;               /* 6 per position: lower, upper */
-    float *frame_boxes;               /* 6 per position: boxes in the frame being binned */
+    /* 6 per position of the range being split (from frame_first on): its
+       boxes in the frame last binned; room for frame_capacity positions,
+       what the ranges binned in a frame span (hairobb__frame_capacity) */
+    float *frame_boxes;
+    size_t frame_first, frame_capacity;
     size_t capacity;                  /* positions */
     unsigned char *node_allocation, *nodes;
     size_t node_bytes, node_capacity;
@@ -1385,7 +1398,7 @@ HAIROBB__INLINE const float *hairobb__ref_points(const hairobb__builder *b, size
     static const float whole[2] = {0.0f, 1.0f};
     const float *cp = b->vertices + 4 * (size_t)b->indices[b->ids[i]];
     /* the bits of [0, 1]: u0 is +0 or above (set_range's 0, or a clip strictly inside) */
-    if (memcmp(b->ranges + 2 * i, whole, sizeof whole) == 0) return cp;
+    if (!b->ranges || memcmp(b->ranges + 2 * i, whole, sizeof whole) == 0) return cp;
     return hairobb__clipped_points(cp, b->ranges[2 * i], b->ranges[2 * i + 1], scratch);
 }
 
@@ -1508,11 +1521,18 @@ static float hairobb__bin_scale(int bins, float extent)
     return extent >= (float)HAIROBB__BINS * FLT_MIN ? (float)bins * (1.0f - 1.0f / 1024.0f) / extent : 0.0f;
 }
 
+/* The box (lower, upper) in the frame last binned of the reference at
+   position i of the range being split (hairobb__find_split). */
+HAIROBB__INLINE float *hairobb__frame_box(const hairobb__builder *b, size_t i)
+{
+    return b->frame_boxes + 6 * (i - b->frame_first);
+}
+
 /* Box of the reference at position i: its world box, or (frame given)
    the box hairobb__bin_split computed in that frame. */
 static void hairobb__box_at(const hairobb__builder *b, const float *frame, size_t i, float lower[3], float upper[3])
 {
-    const float *box = frame ? b->frame_boxes + 6 * i : b->world_boxes + 6 * i;
+    const float *box = frame ? hairobb__frame_box(b, i) : b->world_boxes + 6 * i;
     memcpy(lower, box, 3 * sizeof(float));
     memcpy(upper, box + 3, 3 * sizeof(float));
 }
@@ -1648,14 +1668,18 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
 {
     float box_cost;
     float bmin[3], bmax[3];
-    const float *boxes = frame ? b->frame_boxes : b->world_boxes;
+    /* boxes + 6 * (i - r->begin): position i's */
+    float *boxes = frame ? hairobb__frame_box(b, r->begin) : b->world_boxes + 6 * r->begin;
     hairobb__b4 cmin = hairobb__b4_set1(FLT_MAX), cmax = hairobb__b4_set1(-FLT_MAX), half = hairobb__b4_set1(0.5f);
     hairobb__b4 box_min = cmin, box_max = cmax;
     hairobb__frame_prep prep;
     size_t i;
     /* fewer bins than references only wastes sweeps */
     int axis, bins = r->end - r->begin < HAIROBB__BINS ? (int)(r->end - r->begin) : HAIROBB__BINS;
-    if (frame) hairobb__prepare_frame(frame, &prep);
+    if (frame) {
+        HAIROBB_ASSERT(b->frame_first == r->begin && r->end - r->begin <= b->frame_capacity);
+        hairobb__prepare_frame(frame, &prep);
+    }
     /* the boxes (in a frame: computed here, for the binning and for
        hairobb__partition) and the bounds of their centroids, in one pass */
     for (i = r->begin; i < r->end; ++i) {
@@ -1663,11 +1687,11 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
         if (frame) {
             float scratch[16];
             hairobb__segment_box_v4(hairobb__ref_points(b, i, scratch), &prep, NULL, NULL, &lower, &upper);
-            hairobb__b4_store3(b->frame_boxes + 6 * i, lower);
-            hairobb__b4_store3(b->frame_boxes + 6 * i + 3, upper);
+            hairobb__b4_store3(boxes + 6 * (i - r->begin), lower);
+            hairobb__b4_store3(boxes + 6 * (i - r->begin) + 3, upper);
         } else {
-            lower = hairobb__b4_load4(boxes + 6 * i);
-            upper = hairobb__b4_load_upper(boxes + 6 * i);
+            lower = hairobb__b4_load4(boxes + 6 * (i - r->begin));
+            upper = hairobb__b4_load_upper(boxes + 6 * (i - r->begin));
         }
         c = hairobb__b4_mul(half, hairobb__b4_add(lower, upper));
         cmin = hairobb__b4_min(cmin, c);
@@ -1696,7 +1720,8 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
         }
         scale = hairobb__b4_set3(scales);
         for (i = r->begin; i < r->end; ++i) {
-            hairobb__b4 lower = hairobb__b4_load4(boxes + 6 * i), upper = hairobb__b4_load_upper(boxes + 6 * i);
+            const float *box = boxes + 6 * (i - r->begin);
+            hairobb__b4 lower = hairobb__b4_load4(box), upper = hairobb__b4_load_upper(box);
             int at[4];
             hairobb__b4_bins(hairobb__b4_mul(hairobb__b4_sub(hairobb__b4_mul(half, hairobb__b4_add(lower, upper)), cmin), scale), at);
 #define HAIROBB__BIN_INTO(axis) \
@@ -1882,7 +1907,7 @@ static int hairobb__at_top(const hairobb__builder *b, size_t count) { return b->
    when none is found (all centroids equal) or below the SAH depth. */
 /* hair_space: the frame hairobb__choose_hair_space(b, r, 1, 0, .) gives, if
    known (NULL: chosen here). */
-static void hairobb__find_split(const hairobb__builder *b, const hairobb__range *r, unsigned depth,
+static void hairobb__find_split(hairobb__builder *b, const hairobb__range *r, unsigned depth,
                                 unsigned tries, const float *hair_space, hairobb__split *best)
 {
     float lower[3], upper[3], area = 0.0f;
@@ -1907,6 +1932,7 @@ static void hairobb__find_split(const hairobb__builder *b, const hairobb__range 
             float frame[9];
             if (hair_space) memcpy(frame, hair_space, sizeof frame);
             else hairobb__choose_hair_space(b, r, 1, 0, frame);
+            b->frame_first = r->begin;      /* the frame boxes are r's until the next split */
             hairobb__bin_split(b, r, frame, 2.0f * HAIROBB__COST_OBB, &area, slack, best);
         }
         if (b->policy != HAIROBB_NODES_AABB_ONLY && (tries & HAIROBB__TRY_CLUSTER))
@@ -1946,23 +1972,28 @@ static void hairobb__update_tries(hairobb__tries *t, const hairobb__split *split
 HAIROBB__INLINE void hairobb__swap_positions(hairobb__builder *b, size_t i, size_t j, int frame_box)
 {
     uint32_t id = b->ids[i];
-    float range[2], box[6];
-    memcpy(range, b->ranges + 2 * i, sizeof range);
+    float box[6];
     memcpy(box, b->world_boxes + 6 * i, sizeof box);
     b->ids[i] = b->ids[j];
-    memcpy(b->ranges + 2 * i, b->ranges + 2 * j, sizeof range);
     memcpy(b->world_boxes + 6 * i, b->world_boxes + 6 * j, sizeof box);
     b->ids[j] = id;
-    memcpy(b->ranges + 2 * j, range, sizeof range);
     memcpy(b->world_boxes + 6 * j, box, sizeof box);
-    if (frame_box) memcpy(b->frame_boxes + 6 * i, b->frame_boxes + 6 * j, sizeof box);
+    if (b->ranges) {
+        float range[2];
+        memcpy(range, b->ranges + 2 * i, sizeof range);
+        memcpy(b->ranges + 2 * i, b->ranges + 2 * j, sizeof range);
+        memcpy(b->ranges + 2 * j, range, sizeof range);
+    }
+    if (frame_box) memcpy(hairobb__frame_box(b, i), hairobb__frame_box(b, j), sizeof box);
 }
 
 static void hairobb__set_range(hairobb__builder *b, size_t i, float u0, float u1)
 {
     float scratch[16], identity[9];
-    b->ranges[2 * i] = u0;
-    b->ranges[2 * i + 1] = u1;
+    if (b->ranges) {
+        b->ranges[2 * i] = u0;
+        b->ranges[2 * i + 1] = u1;
+    }
     hairobb__identity_frame(identity);
     hairobb__segment_box(hairobb__ref_points(b, i, scratch), identity, NULL, NULL, b->world_boxes + 6 * i, b->world_boxes + 6 * i + 3);
 }
@@ -1973,7 +2004,7 @@ static int hairobb__side(const hairobb__builder *b, size_t i, const hairobb__spl
 {
     const float *box;
     if (split->kind == HAIROBB__SPLIT_CLUSTER) return hairobb__cluster_of(b, i, split->direction);
-    box = (split->hair_space ? b->frame_boxes : b->world_boxes) + 6 * i + split->axis;   /* box[0] lower, box[3] upper */
+    box = (split->hair_space ? hairobb__frame_box(b, i) : b->world_boxes + 6 * i) + split->axis;   /* box[0] lower, box[3] upper */
     if (split->kind == HAIROBB__SPLIT_SPATIAL) {
         int first = hairobb__bin_of(box[0], split->bin_origin, split->bin_scale);
         int last = hairobb__bin_of(box[3], split->bin_origin, split->bin_scale);
@@ -2022,7 +2053,7 @@ static void hairobb__shift_positions(hairobb__builder *b, size_t from, size_t en
     size_t n = end - from;
     if (to == from || n == 0) return;
     memmove(b->ids + to, b->ids + from, n * sizeof *b->ids);
-    memmove(b->ranges + 2 * to, b->ranges + 2 * from, 2 * n * sizeof *b->ranges);
+    if (b->ranges) memmove(b->ranges + 2 * to, b->ranges + 2 * from, 2 * n * sizeof *b->ranges);
     memmove(b->world_boxes + 6 * to, b->world_boxes + 6 * from, 6 * n * sizeof *b->world_boxes);
 }
 
@@ -2041,10 +2072,11 @@ static void hairobb__partition(hairobb__builder *b, const hairobb__range *r, con
         int frame_box = split->hair_space && split->kind != HAIROBB__SPLIT_CLUSTER;
         if (split->kind == HAIROBB__SPLIT_OBJECT) {
             /* hairobb__side's object test written out: no reference straddles, lo stays mid */
-            const float *box = (frame_box ? b->frame_boxes : b->world_boxes) + split->axis;
+            /* box + 6 * (i - r->begin): position i's */
+            const float *box = (frame_box ? hairobb__frame_box(b, r->begin) : b->world_boxes + 6 * r->begin) + split->axis;
             while (mid < hi) {
-                if (hairobb__bin_of(0.5f * (box[6 * mid] + box[6 * mid + 3]), split->bin_origin, split->bin_scale) <=
-                    split->last_left_bin)
+                const float *at = box + 6 * (mid - r->begin);
+                if (hairobb__bin_of(0.5f * (at[0] + at[3]), split->bin_origin, split->bin_scale) <= split->last_left_bin)
                     mid++;
                 else if (mid < --hi)
                     hairobb__swap_positions(b, mid, hi, frame_box);
@@ -2420,6 +2452,19 @@ static uint64_t hairobb__build_range(hairobb__builder *b, const hairobb__range *
 /* ------------------------------------------------------------------------ */
 /* Builder: tasks on threads, then one tree                                  */
 /* ------------------------------------------------------------------------ */
+/* Positions the frame boxes hold for a builder over `positions` of them: the
+   most a range binned in a frame spans. Above the tasks a mixed tree bins
+   ranges of at most task_limit references in hair space
+   (hairobb__find_split), an AABB tree none. */
+static size_t hairobb__frame_capacity(const hairobb__builder *b, size_t positions)
+{
+    if (b->policy == HAIROBB_NODES_AABB_ONLY) return 0;
+    if (b->policy == HAIROBB_NODES_MIXED && b->task_limit && positions > b->task_limit) return b->task_limit;
+    return positions;
+}
+
+/* A task's memory while it runs: its frame boxes; what stays until the
+   gather: its nodes, in a block of their size. */
 static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task)
 {
     hairobb__builder local = *b;
@@ -2430,7 +2475,24 @@ static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task)
     local.task_limit = 0;           /* no tasks within a task; no progress calls */
     local.tasks = NULL;
     local.task_count = local.task_capacity = 0;
-    task->root = hairobb__build_range(&local, &task->range, task->depth, task->tries, NULL);
+    local.frame_capacity = hairobb__frame_capacity(&local, task->range.cap - task->range.begin);
+    local.frame_boxes = NULL;
+    if (local.frame_capacity) {
+        local.frame_boxes = HAIROBB__CAST(float *, HAIROBB_MALLOC(6 * sizeof(float) * local.frame_capacity, local.user));
+        if (!local.frame_boxes) local.error = HAIROBB_ERROR_OUT_OF_MEMORY;
+    }
+    if (local.error == HAIROBB_OK) task->root = hairobb__build_range(&local, &task->range, task->depth, task->tries, NULL);
+    if (local.frame_boxes) HAIROBB_FREE(local.frame_boxes, local.user);
+    if (local.error == HAIROBB_OK && local.node_bytes < local.node_capacity) {
+        unsigned char *exact = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(local.node_bytes, local.user));
+        if (!exact) {
+            local.error = HAIROBB_ERROR_OUT_OF_MEMORY;
+        } else {
+            memcpy(exact, local.nodes, local.node_bytes);
+            HAIROBB_FREE(local.node_allocation, local.user);
+            local.node_allocation = local.nodes = exact;
+        }
+    }
     task->node_allocation = local.node_allocation;
     task->nodes = local.nodes;
     task->node_bytes = local.node_bytes;
@@ -2558,18 +2620,32 @@ static void hairobb__run_tasks(hairobb__builder *b, unsigned threads, hairobb_pa
     if (b->error == HAIROBB_OK && pool.stop) b->error = HAIROBB_ERROR_CANCELLED;
 }
 
-/* Appends each task's nodes to the node memory, in task order. */
-static void hairobb__gather_tasks(hairobb__builder *b)
+/* The BVH's node memory, of the nodes' size: the top's nodes, then each
+   task's, in task order; each task's block is freed once copied. */
+static void hairobb__gather_tasks(hairobb__builder *b, hairobb_bvh *bvh)
 {
-    size_t k;
-    for (k = 0; k < b->task_count && b->error == HAIROBB_OK; ++k) {
+    size_t k, bytes = b->node_bytes;
+    for (k = 0; k < b->task_count; ++k) {
+        b->tasks[k].node_delta = bytes;
+        bytes += b->tasks[k].node_bytes;
+    }
+    if (bytes) {
+        unsigned char *allocation = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(bytes + 64, b->user));
+        if (!allocation) { b->error = HAIROBB_ERROR_OUT_OF_MEMORY; return; }
+        bvh->node_allocation = allocation;
+        bvh->nodes = hairobb__align64(allocation);
+        bvh->node_bytes = bytes;
+        if (b->node_bytes) memcpy(bvh->nodes, b->nodes, b->node_bytes);
+    }
+    if (b->node_allocation) HAIROBB_FREE(b->node_allocation, b->user);
+    b->node_allocation = b->nodes = NULL;
+    b->node_bytes = b->node_capacity = 0;
+    for (k = 0; k < b->task_count; ++k) {
         hairobb__task *task = &b->tasks[k];
         unsigned depth = task->stats.max_depth;
-        if (task->node_bytes) {
-            task->node_delta = hairobb__alloc_node(b, task->node_bytes);
-            if (b->error != HAIROBB_OK) return;
-            memcpy(b->nodes + task->node_delta, task->nodes, task->node_bytes);
-        }
+        if (task->node_bytes) memcpy(bvh->nodes + task->node_delta, task->nodes, task->node_bytes);
+        if (task->node_allocation) HAIROBB_FREE(task->node_allocation, b->user);
+        task->node_allocation = task->nodes = NULL;
         b->stats.aabb_nodes += task->stats.aabb_nodes;
         b->stats.obb_nodes += task->stats.obb_nodes;
         b->stats.leaves += task->stats.leaves;
@@ -2698,14 +2774,24 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     b.progress = opt.progress;
     b.progress_user = opt.progress_user;
     b.capacity = segment_count + extra;
+    /* the top of the tree here, subtrees of at most task_limit references as
+       tasks; the limit depends on the input alone (same tree on any thread count) */
+    b.task_limit = segment_count / HAIROBB__TASKS > HAIROBB__TASK_MIN ? segment_count / HAIROBB__TASKS : HAIROBB__TASK_MIN;
+    /* the memory the build holds throughout: 28 bytes a position (36 with
+       spatial splits), the frame boxes of the top's ranges (a task has its own) */
+    b.frame_capacity = hairobb__frame_capacity(&b, b.capacity);
     bvh = HAIROBB__CAST(hairobb_bvh *, HAIROBB_MALLOC(sizeof *bvh, b.user));
     if (bvh) memset(bvh, 0, sizeof *bvh);     /* the failure path reads it */
     b.ids = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(sizeof(uint32_t) * b.capacity, b.user));
-    b.ranges = HAIROBB__CAST(float *, HAIROBB_MALLOC(2 * sizeof(float) * b.capacity, b.user));
+    if (opt.spatial_splits == HAIROBB_ON)
+        b.ranges = HAIROBB__CAST(float *, HAIROBB_MALLOC(2 * sizeof(float) * b.capacity, b.user));
     b.world_boxes = HAIROBB__CAST(float *, HAIROBB_MALLOC(6 * sizeof(float) * b.capacity, b.user));
-    b.frame_boxes = HAIROBB__CAST(float *, HAIROBB_MALLOC(6 * sizeof(float) * b.capacity, b.user));
+    if (b.frame_capacity)
+        b.frame_boxes = HAIROBB__CAST(float *, HAIROBB_MALLOC(6 * sizeof(float) * b.frame_capacity, b.user));
     b.error = HAIROBB_ERROR_OUT_OF_MEMORY;
-    if (!bvh || !b.ids || !b.ranges || !b.world_boxes || !b.frame_boxes) goto failed;
+    if (!bvh || !b.ids || (opt.spatial_splits == HAIROBB_ON && !b.ranges) || !b.world_boxes ||
+        (b.frame_capacity && !b.frame_boxes))
+        goto failed;
     if (opt.basis != HAIROBB_BASIS_BEZIER) {
         /* Bezier control points, 16 floats per segment, then the indices */
         float *curves = HAIROBB__CAST(float *, HAIROBB_MALLOC((16 * sizeof(float) + sizeof(uint32_t)) * segment_count, b.user));
@@ -2733,34 +2819,25 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     memset(&tries, 0, sizeof tries);
     tries.enabled = HAIROBB__TRY_HAIR_SPACE | (opt.spatial_splits == HAIROBB_ON ? HAIROBB__TRY_SPATIAL : 0u) |
                     (opt.clustering == HAIROBB_ON ? HAIROBB__TRY_CLUSTER : 0u);
-    /* the top of the tree here, subtrees of at most task_limit references as
-       tasks; the limit depends on the input alone (same tree on any thread count) */
-    b.task_limit = segment_count / HAIROBB__TASKS > HAIROBB__TASK_MIN ? segment_count / HAIROBB__TASKS : HAIROBB__TASK_MIN;
     bvh->root = hairobb__build_range(&b, &root, 0, tries, NULL);
+    if (b.frame_boxes) HAIROBB_FREE(b.frame_boxes, b.user);
+    b.frame_boxes = NULL;
     if (b.error == HAIROBB_OK) hairobb__run_tasks(&b, opt.threads, opt.parallel_for, opt.parallel_for_user);
-    if (b.error == HAIROBB_OK) hairobb__gather_tasks(&b);
+    /* from here on only ids, for the leaves */
+    if (b.ranges) HAIROBB_FREE(b.ranges, b.user);
+    HAIROBB_FREE(b.world_boxes, b.user);
+    b.ranges = b.world_boxes = NULL;
+    if (b.error == HAIROBB_OK) hairobb__gather_tasks(&b, bvh);
     if (b.error != HAIROBB_OK) goto failed;
     if (b.progress && b.progress(b.progress_user, 1.0f)) { b.error = HAIROBB_ERROR_CANCELLED; goto failed; }
 
     /* keep exactly what tracing needs: memory_bytes reports what stays */
     b.error = HAIROBB_ERROR_OUT_OF_MEMORY;
-    if (b.node_bytes) {
-        unsigned char *allocation = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(b.node_bytes + 64, b.user));
-        if (!allocation) goto failed;
-        bvh->node_allocation = allocation;
-        bvh->nodes = hairobb__align64(allocation);
-        memcpy(bvh->nodes, b.nodes, b.node_bytes);
-        bvh->node_bytes = b.node_bytes;
-    }
     bvh->leaf_prims = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(sizeof(uint32_t) * b.stats.leaf_references, b.user));
     if (!bvh->leaf_prims) goto failed;
     hairobb__finish_tree(&b, bvh->nodes, &bvh->root, 0, bvh->leaf_prims, &bvh->leaf_prim_count);
     hairobb__free_tasks(&b);
-    if (b.node_allocation) HAIROBB_FREE(b.node_allocation, b.user);
     HAIROBB_FREE(b.ids, b.user);
-    HAIROBB_FREE(b.ranges, b.user);
-    HAIROBB_FREE(b.world_boxes, b.user);
-    HAIROBB_FREE(b.frame_boxes, b.user);
     hairobb__pad_box(bvh->lower, bvh->upper);
     bvh->vertices = vertices;
     bvh->indices = indices;
@@ -2772,7 +2849,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     bvh->simd = simd;
     hairobb__setup_pieces(bvh, (int)opt.curve_pieces);
     bvh->stats = b.stats;
-    bvh->stats.node_bytes = b.node_bytes;
+    bvh->stats.node_bytes = bvh->node_bytes;
     bvh->stats.leaf_bytes = sizeof(uint32_t) * bvh->leaf_prim_count;
     *out = bvh;
     return HAIROBB_OK;

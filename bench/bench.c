@@ -42,6 +42,8 @@ static struct { unsigned long long node, leaf, segment, segment_passed; } bench_
 #define CALLGRIND_DUMP_STATS_AT(name) ((void)(name))
 #endif
 
+/* hairobb's allocations go through a counting allocator: the build's peak */
+#include "bench/alloc_meter.h"
 #include "hairobb.h"
 #include "tests/embree_wrap.h"
 #include "tests/reference.h"
@@ -729,6 +731,7 @@ typedef struct variant_result {
     int measured;
     double build_seconds;
     size_t memory_bytes;
+    size_t build_transient_bytes; /* hairobb: peak allocations during the build beyond the BVH's memory_bytes */
     hairobb_stats stats;   /* hairobb only */
     /* Mrays/s over the rounds, and the ratio to Embree flat r4 taken within
        each round; NAN when not measured */
@@ -759,6 +762,7 @@ typedef struct workload {
        minutes, too long to do twice. NULL once adopted. */
     hairobb_bvh *default_bvh;
     double default_build_seconds;
+    size_t default_build_transient_bytes;
 } workload;
 
 /* An acceleration structure built for one variant. */
@@ -797,10 +801,17 @@ static const char *simd_paths(void)
     return text;
 }
 
-static hairobb_bvh *build_hairobb(const hair_scene *s, const variant *v, double *seconds)
+/* Every hairobb BVH allocates through this one meter (the allocator_user of
+   every build; BVHs built earlier stay live in it): a build's peak transient
+   bytes = the meter's peak during the build - what was live before it - the
+   BVH's hairobb_memory_bytes. */
+static alloc_meter hairobb_meter;
+
+static hairobb_bvh *build_hairobb(const hair_scene *s, const variant *v, double *seconds, size_t *transient_bytes)
 {
     hairobb_build_options build_options;
     memset(&build_options, 0, sizeof build_options);
+    build_options.allocator_user = &hairobb_meter;
     build_options.threads = v->build_threads;
     build_options.hit_filter = v->hit_filter ? take_every_hit : NULL;
     build_options.nodes = v->nodes;
@@ -811,10 +822,13 @@ static hairobb_bvh *build_hairobb(const hair_scene *s, const variant *v, double 
     build_options.clustering = v->clustering;
     build_options.simd = v->simd;
     hairobb_bvh *bvh = NULL;
+    alloc_meter_reset_peak(&hairobb_meter);
+    size_t live_before = hairobb_meter.current; /* no other thread allocates between builds */
     double start = scene_now();
     hairobb_result result =
         hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, &build_options, &bvh);
     *seconds = scene_now() - start;
+    *transient_bytes = bvh ? hairobb_meter.peak - live_before - hairobb_memory_bytes(bvh) : 0;
     if (result != HAIROBB_OK)
         fprintf(stderr, "bench: %s: hairobb_build (%s): %s\n", s->name, v->key, hairobb_result_string(result));
     return bvh;
@@ -828,9 +842,10 @@ static int build_variant(workload *w, const variant *v, built_accel *b, variant_
         if (w->default_bvh && v == &all_variants[variant_index("default")]) {
             b->bvh = w->default_bvh;
             r->build_seconds = w->default_build_seconds;
+            r->build_transient_bytes = w->default_build_transient_bytes;
             w->default_bvh = NULL;
         } else {
-            b->bvh = build_hairobb(s, v, &r->build_seconds);
+            b->bvh = build_hairobb(s, v, &r->build_seconds, &r->build_transient_bytes);
         }
         if (!b->bvh)
             return 1;
@@ -929,7 +944,7 @@ static unsigned max_threads(const options *o)
 static int spawn_secondary_rays(const options *o, workload *w, int keep_bvh)
 {
     const variant *v = &all_variants[variant_index("default")];
-    hairobb_bvh *bvh = build_hairobb(&w->scene, v, &w->default_build_seconds);
+    hairobb_bvh *bvh = build_hairobb(&w->scene, v, &w->default_build_seconds, &w->default_build_transient_bytes);
     if (!bvh)
         return 1;
     tracer t = hairobb_tracer(bvh);
@@ -1039,9 +1054,10 @@ static void print_scene_header(const options *o, const workload *w)
 static void print_build_table(const scene_result *sr, const int selected[VARIANT_COUNT])
 {
     const variant_result *base = baseline_of(sr);
-    char c1[48], c2[48], c3[48];
-    printf("\nbuild and memory (ratios: this / Embree flat r4; both build on all cores)\n");
-    printf("%-20s %-18s %-18s %-18s %s\n", "variant", "build s", "MB", "bytes/segment",
+    char c1[48], c2[48], c3[48], c4[48];
+    printf("\nbuild and memory (ratios: this / Embree flat r4; both build on all cores; transient: the library's\n"
+           "peak allocations during the build beyond the BVH's memory, bytes/segment)\n");
+    printf("%-20s %-18s %-18s %-18s %-10s %s\n", "variant", "build s", "MB", "bytes/segment", "transient",
            "AABB/OBB nodes, leaves, segments/leaf, depth");
     for (int i = 0; i < VARIANT_COUNT; i++) {
         const variant_result *r = &sr->variants[i];
@@ -1054,6 +1070,11 @@ static void print_build_table(const scene_result *sr, const int selected[VARIANT
                           base ? (double)base->memory_bytes / 1048576.0 : NAN),
                with_ratio(c3, sizeof c3, "%.1f", bytes_per_segment,
                           base ? (double)base->memory_bytes / (double)sr->segment_count : NAN));
+        if (all_variants[i].lib == LIB_HAIROBB)
+            snprintf(c4, sizeof c4, "%.1f", (double)r->build_transient_bytes / (double)sr->segment_count);
+        else
+            snprintf(c4, sizeof c4, "-");
+        printf(" %-10s", c4);
         if (all_variants[i].lib == LIB_HAIROBB)
             printf(" %zu/%zu, %zu, %.2f, %u", r->stats.aabb_nodes, r->stats.obb_nodes, r->stats.leaves,
                    r->stats.leaves ? (double)r->stats.leaf_references / (double)r->stats.leaves : 0.0,
@@ -1212,7 +1233,7 @@ static FILE *tsv_open(const options *o)
         return NULL;
     }
     fputs("scene\tsegments\tvariant\tlabel\tlibrary\tnodes\tprecision\tcurve_pieces\tembree_rate"
-          "\tbuild_s\tmemory_bytes\tbytes_per_segment\taabb_nodes\tobb_nodes\tleaves\tleaf_references\tmax_depth",
+          "\tbuild_s\tmemory_bytes\tbytes_per_segment\tbuild_transient_bytes\ttransient_bytes_per_segment\taabb_nodes\tobb_nodes\tleaves\tleaf_references\tmax_depth",
           f);
     for (int k = 0; k < RAY_KIND_COUNT; k++)
         fprintf(f, "\t%s_rays", ray_kind_names[k]);
@@ -1246,8 +1267,12 @@ static void tsv_write_scene(FILE *f, const options *o, const scene_result *sr, c
                 hairobb ? (v->precision == HAIROBB_PRECISION_EXACT ? "exact" : "pieces")
                         : (v->embree_type == EMB_FLAT_BEZIER ? "flat" : "round"),
                 v->curve_pieces, v->embree_rate);
-        fprintf(f, "\t%.6f\t%zu\t%.3f\t%zu\t%zu\t%zu\t%zu\t%u", r->build_seconds, r->memory_bytes,
-                (double)r->memory_bytes / (double)sr->segment_count, r->stats.aabb_nodes, r->stats.obb_nodes,
+        fprintf(f, "\t%.6f\t%zu\t%.3f", r->build_seconds, r->memory_bytes, (double)r->memory_bytes / (double)sr->segment_count);
+        if (hairobb)
+            fprintf(f, "\t%zu\t%.3f", r->build_transient_bytes, (double)r->build_transient_bytes / (double)sr->segment_count);
+        else
+            fputs("\tNaN\tNaN", f);
+        fprintf(f, "\t%zu\t%zu\t%zu\t%zu\t%u", r->stats.aabb_nodes, r->stats.obb_nodes,
                 r->stats.leaves, r->stats.leaf_references, r->stats.max_depth);
         for (int k = 0; k < RAY_KIND_COUNT; k++)
             fprintf(f, "\t%zu", sr->ray_counts[k]);
@@ -1745,6 +1770,7 @@ int main(int argc, char **argv)
     if (select_variants(o.variant_list, selected) != 0)
         return 2;
     show_progress = isatty(STDERR_FILENO) && !o.quiet;
+    alloc_meter_init(&hairobb_meter, 0);
 
     print_machine(&o);
     static scene_result results[MAX_SCENES];

@@ -14,14 +14,17 @@
 /* Counting allocator that can be told to fail the N-th allocation. It
    fills what it hands out with garbage (so reading memory the library did
    not write shows), and checks every free against the blocks it handed out
-   (a free of anything else is counted, not done). The build may allocate
-   and free on several threads: one lock guards every allocator. */
+   (a free of anything else is counted, not done). It counts the bytes live
+   and their peak. The build may allocate and free on several threads: one
+   lock guards every allocator. */
 #define TEST_MAX_LIVE 1024
 typedef struct test_allocator {
     long calls, fail_at, live;
     long bad_frees;
     int failed;                       /* the fail_at-th call came */
     void *blocks[TEST_MAX_LIVE];
+    size_t sizes[TEST_MAX_LIVE];
+    size_t bytes, peak_bytes;
 } test_allocator;
 static pthread_mutex_t test_allocator_lock = PTHREAD_MUTEX_INITIALIZER;
 static void *test_malloc(size_t size, void *user)
@@ -38,7 +41,10 @@ static void *test_malloc(size_t size, void *user)
         for (i = 0; i < TEST_MAX_LIVE && a->blocks[i]; ++i) {}
         if (i == TEST_MAX_LIVE) { printf("test allocator: too many live blocks\n"); exit(1); }
         a->blocks[i] = p;
+        a->sizes[i] = size;
         a->live++;
+        a->bytes += size;
+        if (a->bytes > a->peak_bytes) a->peak_bytes = a->bytes;
     }
     pthread_mutex_unlock(&test_allocator_lock);
     return p;
@@ -56,6 +62,7 @@ static void test_free(void *p, void *user)
     } else {
         a->blocks[i] = NULL;
         a->live--;
+        a->bytes -= a->sizes[i];
         free(p);
     }
     pthread_mutex_unlock(&test_allocator_lock);
@@ -1239,6 +1246,48 @@ static void test_allocation_failure(void)
     free(indices[1]);
 }
 
+/* What a build holds beyond the BVH it returns (the peak of its
+   allocations minus hairobb_memory_bytes): at most 48 bytes a segment on
+   combed fur with the default options, on 1 and 2 threads; with spatial
+   splits (budget 0.25: 1.25 positions a segment, 36 bytes each) as well.
+   The bound holds while node bytes stay under 48 a segment (the tasks'
+   nodes and the BVH's are live at once, as they are copied). */
+static void test_build_memory(void)
+{
+    static const struct { const char *name; hairobb_switch spatial; unsigned threads; } configs[] = {
+        {"default options, 1 thread", HAIROBB_AUTO, 1},
+        {"default options, 2 threads", HAIROBB_AUTO, 2},
+        {"spatial splits, 2 threads", HAIROBB_ON, 2},
+    };
+    hair_scene s;
+    size_t c;
+    if (scene_combed(&s, 50000, 1) != 0) { CHECK(0, "combed fur for the memory test"); return; }
+    for (c = 0; c < sizeof configs / sizeof configs[0]; ++c) {
+        test_allocator a;
+        hairobb_build_options opt;
+        hairobb_bvh *bvh = NULL;
+        hairobb_result r;
+        memset(&a, 0, sizeof a);
+        a.fail_at = -1;
+        memset(&opt, 0, sizeof opt);
+        opt.allocator_user = &a;
+        opt.spatial_splits = configs[c].spatial;
+        opt.threads = configs[c].threads;
+        r = hairobb_build(s.vertices, s.vertex_count, s.indices, s.segment_count, &opt, &bvh);
+        CHECK(r == HAIROBB_OK, "%s: build: %s", configs[c].name, hairobb_result_string(r));
+        if (r != HAIROBB_OK) continue;
+        CHECK(a.bytes == hairobb_memory_bytes(bvh), "%s: %zu bytes live after the build, memory_bytes %zu", configs[c].name,
+              a.bytes, hairobb_memory_bytes(bvh));
+        CHECK(a.peak_bytes - hairobb_memory_bytes(bvh) <= 48 * s.segment_count,
+              "%s: peak transient %.1f bytes a segment (at most 48), BVH %.1f", configs[c].name,
+              (double)(a.peak_bytes - hairobb_memory_bytes(bvh)) / (double)s.segment_count,
+              (double)hairobb_memory_bytes(bvh) / (double)s.segment_count);
+        hairobb_free(bvh);
+        CHECK(a.live == 0 && a.bytes == 0, "%s: %ld blocks live after hairobb_free", configs[c].name, a.live);
+    }
+    scene_free(&s);
+}
+
 int main(void)
 {
     test_frames();
@@ -1251,5 +1300,6 @@ int main(void)
     test_bad_rays();
     test_bad_input();
     test_allocation_failure();
+    test_build_memory();
     return check_summary();
 }
