@@ -1862,17 +1862,25 @@ static void hairobb__node_box(const hairobb__builder *b, const hairobb__range *r
     hairobb__pad_box(lower, upper);
 }
 
-/* A float point near the middle of the range's world box. */
+/* A float point near the middle of a world box: an OBB or compressed
+   node's centre (the builder's, and the refit's from its new box). */
+static void hairobb__box_centre(const float lower[3], const float upper[3], float centre[3])
+{
+    int k;
+    for (k = 0; k < 3; ++k) centre[k] = 0.5f * lower[k] + 0.5f * upper[k];
+}
+
+/* The centre of the ranges' world box. */
 static void hairobb__range_centre(const hairobb__builder *b, const hairobb__range *ranges, int range_count, float centre[3])
 {
     float lower[3], upper[3], lo[3], hi[3];
-    int k, i;
+    int i;
     hairobb__box_empty(lower, upper);
     for (i = 0; i < range_count; ++i) {
         hairobb__range_box(b, ranges[i].begin, ranges[i].end, lo, hi);
         hairobb__box_grow(lower, upper, lo, hi);
     }
-    for (k = 0; k < 3; ++k) centre[k] = 0.5f * lower[k] + 0.5f * upper[k];
+    hairobb__box_centre(lower, upper, centre);
 }
 
 /* Above the tasks: the ranges the calling thread splits alone. */
@@ -2206,10 +2214,6 @@ static void hairobb__store_compressed(float step_out[3], signed char (*lower_byt
     }
 }
 
-static uint64_t hairobb__build_range(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries,
-                                     const float *hair_space);
-static uint64_t hairobb__add_task(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries);
-
 static size_t hairobb__node_size(unsigned node_type)
 {
     switch (node_type) {
@@ -2220,6 +2224,144 @@ static size_t hairobb__node_size(unsigned node_type)
     default: return sizeof(hairobb__compressed_node);
     }
 }
+
+/* Node memory a node takes: the node, and after an affine OBB node the
+   main direction of each child's frame (3 floats, a multiple of 16 bytes
+   per node), which its maps no longer give exactly; the traversal never
+   reads them, hairobb_refit rebuilds the frames from them. */
+static size_t hairobb__node_stride(unsigned node_type)
+{
+    return hairobb__node_size(node_type) + (node_type == HAIROBB__REF_OBB ? HAIROBB__W * 3 * sizeof(float) : 0);
+}
+
+/* Keeps the frames of a node's children as its type stores them (node
+   zeroed): per child (affine OBB: the direction a frame was made from,
+   (0,0,0) for the world axes; compressed per child: bytes), or frames[0]
+   for all (rotated: floats; compressed rotated: bytes). */
+static void hairobb__store_frames(unsigned char *node, unsigned node_type, int count, const float (*frames)[9])
+{
+    int i, k;
+    if (node_type == HAIROBB__REF_OBB) {
+        float *directions = HAIROBB__CAST(float *, (void *)(node + sizeof(hairobb__obb_node)));
+        float identity[9];
+        hairobb__identity_frame(identity);
+        for (i = 0; i < count; ++i)
+            if (memcmp(frames[i], identity, sizeof identity) != 0) memcpy(directions + 3 * i, frames[i] + 6, 3 * sizeof(float));
+    } else if (node_type == HAIROBB__REF_QOBB_PER_CHILD) {
+        hairobb__compressed_obb_node *q = HAIROBB__CAST(hairobb__compressed_obb_node *, (void *)node);
+        for (i = 0; i < count; ++i)
+            for (k = 0; k < 9; ++k) q->rotation[k][i] = (signed char)lrintf(frames[i][k] * 127.0f);
+    } else if (node_type == HAIROBB__REF_QOBB) {
+        hairobb__compressed_node *q = HAIROBB__CAST(hairobb__compressed_node *, (void *)node);
+        for (k = 0; k < 9; ++k) q->rotation[k] = (signed char)lrintf(frames[0][k] * 127.0f);
+    } else if (node_type == HAIROBB__REF_ROTATED) {
+        memcpy(HAIROBB__CAST(hairobb__rotated_node *, (void *)node)->rotation, frames[0], 9 * sizeof(float));
+    }
+}
+
+/* The frames the node's child boxes are in, as the traversal decodes
+   them: frames[i] for child i < count, or frames[0] for all children of
+   the one-frame types (axis-aligned nodes: the world axes). A frame made
+   from a direction is made again from it, bit for bit. */
+static void hairobb__node_frames(const unsigned char *node, unsigned node_type, int count, float (*frames)[9])
+{
+    int i, k;
+    if (node_type == HAIROBB__REF_OBB) {
+        const float *directions = HAIROBB__CAST(const float *, (const void *)(node + sizeof(hairobb__obb_node)));
+        for (i = 0; i < count; ++i) {
+            if (directions[3 * i] == 0.0f && directions[3 * i + 1] == 0.0f && directions[3 * i + 2] == 0.0f)
+                hairobb__identity_frame(frames[i]);
+            else
+                hairobb__frame_from_direction(directions + 3 * i, frames[i]);
+        }
+    } else if (node_type == HAIROBB__REF_QOBB_PER_CHILD) {
+        const hairobb__compressed_obb_node *q = HAIROBB__CAST(const hairobb__compressed_obb_node *, (const void *)node);
+        for (i = 0; i < count; ++i) {
+            signed char bytes[9];
+            for (k = 0; k < 9; ++k) bytes[k] = q->rotation[k][i];
+            hairobb__decode_rotation(bytes, frames[i]);
+        }
+    } else if (node_type == HAIROBB__REF_QOBB) {
+        hairobb__decode_rotation(HAIROBB__CAST(const hairobb__compressed_node *, (const void *)node)->rotation, frames[0]);
+    } else if (node_type == HAIROBB__REF_ROTATED) {
+        memcpy(frames[0], HAIROBB__CAST(const hairobb__rotated_node *, (const void *)node)->rotation, 9 * sizeof(float));
+    } else {
+        hairobb__identity_frame(frames[0]);
+    }
+}
+
+/* Writes the boxes of a node's children, child i bounding the references
+   of ranges[i] in its frame (hairobb__node_frames) around centre, and the
+   node's empty lanes; its frames and child references are left as they
+   are. The builder and hairobb_refit write every node with it. */
+static void hairobb__write_boxes(const hairobb__builder *b, unsigned char *node_memory, unsigned node_type,
+                                 const float centre[3], const hairobb__range *ranges, int count, const float (*frames)[9])
+{
+    int i, k;
+    if (node_type == HAIROBB__REF_OBB) {
+        hairobb__obb_node *node = HAIROBB__CAST(hairobb__obb_node *, (void *)node_memory);
+        memcpy(node->centre, centre, 3 * sizeof(float));
+        node->centre[3] = 0.0f;
+        for (i = 0; i < HAIROBB__W; ++i) {
+            float frame[9], lower[3], upper[3];
+            if (i < count) {
+                memcpy(frame, frames[i], sizeof frame);
+                hairobb__node_box(b, &ranges[i], frame, node->centre, lower, upper);
+            } else {
+                /* an empty child maps everything to (2,2,2): never inside the unit cube */
+                memset(frame, 0, sizeof frame);
+                lower[0] = lower[1] = lower[2] = -2.0f;
+                upper[0] = upper[1] = upper[2] = -1.0f;
+            }
+            hairobb__store_obb(node, i, frame, lower, upper);
+        }
+    } else if (node_type == HAIROBB__REF_QOBB_PER_CHILD) {
+        hairobb__compressed_obb_node *node = HAIROBB__CAST(hairobb__compressed_obb_node *, (void *)node_memory);
+        float lower[HAIROBB__W][3], upper[HAIROBB__W][3];
+        memcpy(node->centre, centre, 3 * sizeof(float));
+        for (i = 0; i < count; ++i) hairobb__node_box(b, &ranges[i], frames[i], node->centre, lower[i], upper[i]);
+        hairobb__store_compressed(node->step, node->lower, node->upper, count, (const float (*)[3])lower, (const float (*)[3])upper);
+        /* Empty lanes: the identity and the point box at -128 steps on each
+           axis, outside every child. An inverted box would not do: this
+           node's test takes each slab's planes in either order, which turns
+           it into the whole cube of steps (1.24 visits of empty children a
+           ray on combed fur, before). */
+        for (i = count; i < HAIROBB__W; ++i) {
+            node->rotation[0][i] = node->rotation[4][i] = node->rotation[8][i] = 127;
+            for (k = 0; k < 3; ++k) node->lower[k][i] = node->upper[k][i] = -128;
+        }
+    } else if (node_type == HAIROBB__REF_QAABB || node_type == HAIROBB__REF_QOBB) {
+        hairobb__compressed_node *node = HAIROBB__CAST(hairobb__compressed_node *, (void *)node_memory);
+        float lower[HAIROBB__W][3], upper[HAIROBB__W][3];
+        memcpy(node->centre, centre, 3 * sizeof(float));
+        for (i = 0; i < count; ++i) hairobb__node_box(b, &ranges[i], frames[0], node->centre, lower[i], upper[i]);
+        hairobb__store_compressed(node->step, node->lower, node->upper, count, (const float (*)[3])lower, (const float (*)[3])upper);
+    } else {
+        /* AABB and rotated nodes: all boxes in one frame (world axes, no centre, for AABB) */
+        float (*lower)[HAIROBB__W], (*upper)[HAIROBB__W];
+        const float *box_centre = NULL;
+        if (node_type == HAIROBB__REF_ROTATED) {
+            hairobb__rotated_node *node = HAIROBB__CAST(hairobb__rotated_node *, (void *)node_memory);
+            memcpy(node->centre, centre, sizeof node->centre);
+            box_centre = node->centre;
+            lower = node->lower; upper = node->upper;
+        } else {
+            hairobb__aabb_node *node = HAIROBB__CAST(hairobb__aabb_node *, (void *)node_memory);
+            lower = node->lower; upper = node->upper;
+        }
+        for (i = 0; i < HAIROBB__W; ++i) {
+            float lo[3], hi[3];
+            if (i < count) {
+                hairobb__node_box(b, &ranges[i], frames[0], box_centre, lo, hi);
+            } else { for (k = 0; k < 3; ++k) { lo[k] = INFINITY; hi[k] = -INFINITY; } }
+            for (k = 0; k < 3; ++k) { lower[k][i] = lo[k]; upper[k][i] = hi[k]; }
+        }
+    }
+}
+
+static uint64_t hairobb__build_range(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries,
+                                     const float *hair_space);
+static uint64_t hairobb__add_task(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries);
 
 /* SAH cost of a leaf, on the scale of hairobb__bin_split's costs */
 static float hairobb__leaf_cost(size_t count, float area) { return HAIROBB__COST_SEGMENT * (float)count * area; }
@@ -2234,9 +2376,12 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
     /* per-child frames: the sampled sums also answer the child's own split */
     float hints[HAIROBB__W][9];
     const float *hint[HAIROBB__W];
+    float frames[HAIROBB__W][9], centre[3];
     int count = 1, use_obb = b->policy == HAIROBB_NODES_OBB_ONLY, i;
     unsigned node_type;
-    size_t offset, node_size, child_offset;
+    size_t offset, node_stride, child_offset;
+    unsigned char *node;
+    const uint64_t empty = HAIROBB__REF_EMPTY;
     hairobb__split split = *first_split;
     children[0].range = *r; children[0].area = FLT_MAX; children[0].final_leaf = 0;
     for (;;) {
@@ -2272,101 +2417,32 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
     else if (use_obb && b->obb_layout == HAIROBB_OBB_PER_CHILD) node_type = HAIROBB__REF_OBB;
     else if (use_obb) node_type = HAIROBB__REF_ROTATED;
     else node_type = HAIROBB__REF_AABB;
-    node_size = hairobb__node_size(node_type);
-    child_offset = node_size - HAIROBB__W * sizeof(uint64_t);   /* every layout ends with child[W] */
-    offset = hairobb__alloc_node(b, node_size);
+    node_stride = hairobb__node_stride(node_type);
+    child_offset = hairobb__node_size(node_type) - HAIROBB__W * sizeof(uint64_t);   /* every layout ends with child[W] */
+    offset = hairobb__alloc_node(b, node_stride);
     if (b->error != HAIROBB_OK) return HAIROBB__REF_EMPTY;
     if (use_obb) b->stats.obb_nodes++; else b->stats.aabb_nodes++;
     /* boxes first: building the children moves references within their ranges */
-    for (i = 0; i < count; ++i) { ranges[i] = children[i].range; hint[i] = NULL; }
+    for (i = 0; i < count; ++i) ranges[i] = children[i].range;
 
-    if (node_type == HAIROBB__REF_OBB) {
-        hairobb__obb_node *node = HAIROBB__CAST(hairobb__obb_node *, (void *)(b->nodes + offset));
-        hairobb__range_centre(b, ranges, count, node->centre);
-        node->centre[3] = 0.0f;
-        for (i = 0; i < HAIROBB__W; ++i) {
-            float frame[9], lower[3], upper[3];
-            if (i < count) {
-                hairobb__choose_hair_spaces(b, &ranges[i], 1, 1, frame, hints[i]);
-                hint[i] = hints[i];
-                hairobb__node_box(b, &ranges[i], frame, node->centre, lower, upper);
-            } else {
-                /* an empty child maps everything to (2,2,2): never inside the unit cube */
-                memset(frame, 0, sizeof frame);
-                lower[0] = lower[1] = lower[2] = -2.0f;
-                upper[0] = upper[1] = upper[2] = -1.0f;
-            }
-            hairobb__store_obb(node, i, frame, lower, upper);
-            node->child[i] = HAIROBB__REF_EMPTY;
-        }
-    } else if (node_type == HAIROBB__REF_QOBB_PER_CHILD) {
-        hairobb__compressed_obb_node *node = HAIROBB__CAST(hairobb__compressed_obb_node *, (void *)(b->nodes + offset));
-        float lower[HAIROBB__W][3], upper[HAIROBB__W][3];
-        memset(node, 0, sizeof *node);
-        hairobb__range_centre(b, ranges, count, node->centre);
+    /* the frames first (chosen here, stored as the node keeps them, then
+       decoded as the traversal and the refit decode them), then the boxes */
+    node = b->nodes + offset;
+    memset(node, 0, node_stride);
+    for (i = 0; i < count; ++i) hint[i] = NULL;
+    if (node_type == HAIROBB__REF_OBB || node_type == HAIROBB__REF_QOBB_PER_CHILD) {
         for (i = 0; i < count; ++i) {
-            float frame[9];
-            signed char q[9];
-            int k;
-            hairobb__choose_hair_spaces(b, &ranges[i], 1, 1, frame, hints[i]);
+            hairobb__choose_hair_spaces(b, &ranges[i], 1, 1, frames[i], hints[i]);
             hint[i] = hints[i];
-            for (k = 0; k < 9; ++k) node->rotation[k][i] = q[k] = (signed char)lrintf(frame[k] * 127.0f);
-            hairobb__decode_rotation(q, frame);
-            hairobb__node_box(b, &ranges[i], frame, node->centre, lower[i], upper[i]);
         }
-        hairobb__store_compressed(node->step, node->lower, node->upper, count, (const float (*)[3])lower, (const float (*)[3])upper);
-        /* Empty lanes: the identity and the point box at -128 steps on each
-           axis, outside every child. An inverted box would not do: this
-           node's test takes each slab's planes in either order, which turns
-           it into the whole cube of steps (1.24 visits of empty children a
-           ray on combed fur, before). */
-        for (i = count; i < HAIROBB__W; ++i) {
-            int k;
-            node->rotation[0][i] = node->rotation[4][i] = node->rotation[8][i] = 127;
-            for (k = 0; k < 3; ++k) node->lower[k][i] = node->upper[k][i] = -128;
-        }
-        for (i = 0; i < HAIROBB__W; ++i) node->child[i] = HAIROBB__REF_EMPTY;
-    } else if (node_type == HAIROBB__REF_QAABB || node_type == HAIROBB__REF_QOBB) {
-        hairobb__compressed_node *node = HAIROBB__CAST(hairobb__compressed_node *, (void *)(b->nodes + offset));
-        float frame[9], lower[HAIROBB__W][3], upper[HAIROBB__W][3];
-        memset(node, 0, sizeof *node);
-        hairobb__identity_frame(frame);
-        if (node_type == HAIROBB__REF_QOBB) {
-            hairobb__choose_hair_space(b, ranges, count, 1, frame);
-            for (i = 0; i < 9; ++i) node->rotation[i] = (signed char)lrintf(frame[i] * 127.0f);
-            hairobb__decode_rotation(node->rotation, frame);
-        }
-        hairobb__range_centre(b, ranges, count, node->centre);
-        for (i = 0; i < count; ++i) hairobb__node_box(b, &ranges[i], frame, node->centre, lower[i], upper[i]);
-        hairobb__store_compressed(node->step, node->lower, node->upper, count, (const float (*)[3])lower, (const float (*)[3])upper);
-        for (i = 0; i < HAIROBB__W; ++i) node->child[i] = HAIROBB__REF_EMPTY;
-    } else {
-        /* AABB and rotated nodes: all boxes in one frame (world axes, no centre, for AABB) */
-        float frame[9], (*lower)[HAIROBB__W], (*upper)[HAIROBB__W];
-        const float *centre = NULL;
-        uint64_t *child;
-        if (node_type == HAIROBB__REF_ROTATED) {
-            hairobb__rotated_node *node = HAIROBB__CAST(hairobb__rotated_node *, (void *)(b->nodes + offset));
-            hairobb__choose_hair_space(b, ranges, count, 1, frame);
-            memcpy(node->rotation, frame, sizeof frame);
-            hairobb__range_centre(b, ranges, count, node->centre);
-            centre = node->centre;
-            lower = node->lower; upper = node->upper; child = node->child;
-        } else {
-            hairobb__aabb_node *node = HAIROBB__CAST(hairobb__aabb_node *, (void *)(b->nodes + offset));
-            hairobb__identity_frame(frame);
-            lower = node->lower; upper = node->upper; child = node->child;
-        }
-        for (i = 0; i < HAIROBB__W; ++i) {
-            float lo[3], hi[3];
-            int k;
-            if (i < count) {
-                hairobb__node_box(b, &ranges[i], frame, centre, lo, hi);
-            } else { for (k = 0; k < 3; ++k) { lo[k] = INFINITY; hi[k] = -INFINITY; } }
-            for (k = 0; k < 3; ++k) { lower[k][i] = lo[k]; upper[k][i] = hi[k]; }
-            child[i] = HAIROBB__REF_EMPTY;
-        }
+    } else if (node_type == HAIROBB__REF_QOBB || node_type == HAIROBB__REF_ROTATED) {
+        hairobb__choose_hair_space(b, ranges, count, 1, frames[0]);
     }
+    hairobb__store_frames(node, node_type, count, (const float (*)[9])frames);
+    hairobb__node_frames(node, node_type, count, frames);
+    hairobb__range_centre(b, ranges, count, centre);
+    hairobb__write_boxes(b, node, node_type, centre, ranges, count, (const float (*)[9])frames);
+    for (i = 0; i < HAIROBB__W; ++i) memcpy(node + child_offset + i * sizeof(uint64_t), &empty, sizeof empty);
     for (i = 0; i < count; ++i) {
         const hairobb__range *c = &children[i].range;
         size_t n = c->end - c->begin;
@@ -2442,7 +2518,10 @@ static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task)
 /* Tasks are handed out in order; the calling thread reports progress and
    turns a cancel into a stop for every thread. */
 typedef struct hairobb__pool {
-    hairobb__builder *b;              /* the calling thread's */
+    size_t task_count;                /* run(context, k) for each k < task_count */
+    hairobb_task_fn run;
+    void *context;
+    hairobb__builder *b;              /* a build's calling thread's (progress, cancels); NULL: a refit */
     hairobb__builder shared;          /* what every task starts from; never written while threads run */
     size_t next_task, positions_done;
     int stop;
@@ -2466,11 +2545,12 @@ static void hairobb__work(hairobb__pool *pool, int calling_thread)
     for (;;) {
         size_t k, done;
         hairobb__pool_lock(pool, 1);
-        k = pool->stop ? b->task_count : pool->next_task;
-        if (k < b->task_count) pool->next_task++;
+        k = pool->stop ? pool->task_count : pool->next_task;
+        if (k < pool->task_count) pool->next_task++;
         hairobb__pool_lock(pool, 0);
-        if (k >= b->task_count) return;
-        hairobb__run_task(&pool->shared, &b->tasks[k]);
+        if (k >= pool->task_count) return;
+        pool->run(pool->context, (unsigned)k);
+        if (!b) continue;
         hairobb__pool_lock(pool, 1);
         pool->positions_done += b->tasks[k].range.cap - b->tasks[k].range.begin;
         done = pool->positions_done;
@@ -2520,12 +2600,11 @@ static void hairobb__run_tasks_for(hairobb__pool *pool, hairobb_parallel_for_fn 
 static void hairobb__run_tasks_on_threads(hairobb__pool *pool, unsigned threads)
 {
 #if HAIROBB__THREADS
-    hairobb__builder *b = pool->b;
     if (threads == 0) {
         long cores = sysconf(_SC_NPROCESSORS_ONLN);
         threads = cores < 1 ? 1u : cores > 256 ? 256u : (unsigned)cores;
     }
-    if (threads > b->task_count) threads = b->task_count ? (unsigned)b->task_count : 1u;
+    if (threads > pool->task_count) threads = pool->task_count ? (unsigned)pool->task_count : 1u;
     if (threads > 1 && pthread_mutex_init(&pool->lock, NULL) == 0) {
         pthread_t workers[255];
         unsigned started = 0, i;
@@ -2547,6 +2626,9 @@ static void hairobb__run_tasks(hairobb__builder *b, unsigned threads, hairobb_pa
     hairobb__pool pool;
     size_t k;
     memset(&pool, 0, sizeof pool);
+    pool.task_count = b->task_count;
+    pool.run = hairobb__run_task_at;
+    pool.context = &pool;
     pool.b = b;
     pool.positions_done = b->positions_done;    /* leaves of the top part */
     pool.shared = *b;
