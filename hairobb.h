@@ -345,6 +345,18 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
                                          const hairobb_build_options *options, hairobb_bvh **out);
 HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh);
 
+/* Refit (see REFIT): the same segments at new positions (and radii),
+   vertices as the build's (the same vertex_count and indices). The tree
+   keeps its topology and frames; every box is recomputed. For Bezier input
+   the BVH keeps the new pointer (keep it alive and unchanged); other bases
+   are converted again into the curves it owns. NULL: INVALID_ARGUMENT;
+   NaN/Inf, |coordinate| > 1e18 or a negative radius: INVALID_GEOMETRY,
+   and the BVH is left as it was. Hermite BVHs need new tangents too:
+   hairobb_refit_tangents (tangents NULL for every other basis). Not while
+   another thread traces the BVH. */
+HAIROBB_DEF hairobb_result hairobb_refit(hairobb_bvh *bvh, const float *vertices);
+HAIROBB_DEF hairobb_result hairobb_refit_tangents(hairobb_bvh *bvh, const float *vertices, const float *tangents);
+
 /* Every byte the BVH allocated (the caller's arrays are not counted). */
 HAIROBB_DEF size_t hairobb_memory_bytes(const hairobb_bvh *bvh);
 
@@ -353,6 +365,9 @@ typedef struct hairobb_stats {
     size_t leaf_references;   /* segment references in leaves */
     unsigned max_depth;       /* root = 0 */
     size_t node_bytes, leaf_bytes;
+    /* SAH cost of the tree (see REFIT), now and as built: a renderer that
+       refits can rebuild when sah_cost / build_sah_cost passes a threshold */
+    double sah_cost, build_sah_cost;
 } hairobb_stats;
 HAIROBB_DEF void hairobb_get_stats(const hairobb_bvh *bvh, hairobb_stats *stats);
 
@@ -745,6 +760,15 @@ struct hairobb_bvh {
     size_t node_bytes;
     uint32_t *leaf_prims;             /* segment ids, leaves index ranges of it */
     size_t leaf_prim_count;
+    float *leaf_ranges;               /* u0, u1 of each leaf_prims entry where spatial splits clipped some; else NULL */
+    /* what hairobb_refit needs: the input's size and basis, the caller's
+       indices (copied after the curves for other bases), the build's threads */
+    size_t vertex_count;
+    hairobb_basis basis;
+    const uint32_t *source_indices;
+    unsigned threads;
+    hairobb_parallel_for_fn parallel_for;
+    void *parallel_for_user;
     uint64_t root;
     float lower[3], upper[3];
     hairobb_precision precision;
@@ -1384,8 +1408,9 @@ HAIROBB__INLINE const float *hairobb__ref_points(const hairobb__builder *b, size
 {
     static const float whole[2] = {0.0f, 1.0f};
     const float *cp = b->vertices + 4 * (size_t)b->indices[b->ids[i]];
-    /* the bits of [0, 1]: u0 is +0 or above (set_range's 0, or a clip strictly inside) */
-    if (memcmp(b->ranges + 2 * i, whole, sizeof whole) == 0) return cp;
+    /* the bits of [0, 1]: u0 is +0 or above (set_range's 0, or a clip strictly inside);
+       no ranges (a refit of a tree without clipped references): all whole */
+    if (!b->ranges || memcmp(b->ranges + 2 * i, whole, sizeof whole) == 0) return cp;
     return hairobb__clipped_points(cp, b->ranges[2 * i], b->ranges[2 * i + 1], scratch);
 }
 
@@ -2674,7 +2699,7 @@ static void hairobb__free_tasks(hairobb__builder *b)
    offsets move by where the subtree's nodes went, and leaves get their
    segment ids copied out of the positions they named. */
 static void hairobb__finish_tree(const hairobb__builder *b, unsigned char *nodes, uint64_t *ref, size_t node_delta,
-                                 uint32_t *leaf_prims, size_t *leaf_count)
+                                 uint32_t *leaf_prims, float *leaf_ranges, size_t *leaf_count)
 {
     unsigned type = HAIROBB__REF_TYPE(*ref);
     size_t child_offset;
@@ -2689,6 +2714,7 @@ static void hairobb__finish_tree(const hairobb__builder *b, unsigned char *nodes
     if (type == HAIROBB__REF_LEAF) {
         size_t start = (size_t)(*ref >> 8), count = (size_t)((*ref >> 4) & 15u);
         memcpy(leaf_prims + *leaf_count, b->ids + start, count * sizeof(uint32_t));
+        if (leaf_ranges) memcpy(leaf_ranges + 2 * *leaf_count, b->ranges + 2 * start, 2 * count * sizeof(float));
         *ref = ((uint64_t)*leaf_count << 8) | ((uint64_t)count << 4) | HAIROBB__REF_LEAF;
         *leaf_count += count;
         return;
@@ -2698,7 +2724,7 @@ static void hairobb__finish_tree(const hairobb__builder *b, unsigned char *nodes
     for (i = 0; i < HAIROBB__W; ++i) {
         uint64_t child;
         memcpy(&child, nodes + child_offset + i * sizeof child, sizeof child);
-        hairobb__finish_tree(b, nodes, &child, node_delta, leaf_prims, leaf_count);
+        hairobb__finish_tree(b, nodes, &child, node_delta, leaf_prims, leaf_ranges, leaf_count);
         memcpy(nodes + child_offset + i * sizeof child, &child, sizeof child);
     }
 }
@@ -2726,6 +2752,20 @@ static void hairobb__setup_pieces(hairobb_bvh *bvh, int pieces)
     }
 }
 
+/* Bytes of the Bezier curves other bases are converted to: 16 floats,
+   their index and the caller's index per segment. */
+static size_t hairobb__curve_bytes(size_t segment_count)
+{
+    return (16 * sizeof(float) + 2 * sizeof(uint32_t)) * segment_count;
+}
+
+/* Bytes of the leaves' segment ids, and of the clipped parts' ranges. */
+static size_t hairobb__leaf_bytes(const hairobb_bvh *bvh)
+{
+    return (sizeof(uint32_t) + (bvh->leaf_ranges ? 2 * sizeof(float) : 0)) * bvh->leaf_prim_count;
+}
+
+static double hairobb__sah_cost(const hairobb_bvh *bvh);
 
 HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_count,
                              const uint32_t *indices, size_t segment_count,
@@ -2766,7 +2806,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     if (result != HAIROBB_OK) return result;
 
     extra = opt.spatial_splits == HAIROBB_ON ? (size_t)((double)segment_count * opt.spatial_split_budget) : 0;
-    if (segment_count > (size_t)-1 / 2 - extra || segment_count > (size_t)-1 / (16 * sizeof(float) + sizeof(uint32_t)) ||
+    if (segment_count > (size_t)-1 / 2 - extra || segment_count > (size_t)-1 / (16 * sizeof(float) + 2 * sizeof(uint32_t)) ||
         segment_count + extra > (size_t)-1 / (6 * sizeof(float)) || segment_count + extra > 0xffffffffu)
         return HAIROBB_ERROR_TOO_LARGE;
     memset(&b, 0, sizeof b);
@@ -2789,11 +2829,14 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     b.error = HAIROBB_ERROR_OUT_OF_MEMORY;
     if (!bvh || !b.ids || !b.ranges || !b.world_boxes || !b.frame_boxes) goto failed;
     if (opt.basis != HAIROBB_BASIS_BEZIER) {
-        /* Bezier control points, 16 floats per segment, then the indices */
-        float *curves = HAIROBB__CAST(float *, HAIROBB_MALLOC((16 * sizeof(float) + sizeof(uint32_t)) * segment_count, b.user));
+        /* Bezier control points, 16 floats per segment, then their indices,
+           then the caller's (a refit converts new points again) */
+        float *curves = HAIROBB__CAST(float *, HAIROBB_MALLOC(hairobb__curve_bytes(segment_count), b.user));
         uint32_t *curve_indices;
         if (!curves) goto failed;
         curve_indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, curves + 16 * segment_count));
+        memcpy(curve_indices + segment_count, indices, segment_count * sizeof(uint32_t));
+        bvh->source_indices = curve_indices + segment_count;
         bvh->curves = curves;
         for (i = 0; i < segment_count; ++i) {
             size_t at = 4 * (size_t)indices[i];
@@ -2836,7 +2879,17 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     }
     bvh->leaf_prims = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(sizeof(uint32_t) * b.stats.leaf_references, b.user));
     if (!bvh->leaf_prims) goto failed;
-    hairobb__finish_tree(&b, bvh->nodes, &bvh->root, 0, bvh->leaf_prims, &bvh->leaf_prim_count);
+    if (opt.spatial_splits == HAIROBB_ON) {
+        /* hairobb_refit bounds the clipped parts again: their u ranges stay, unless none was clipped */
+        bvh->leaf_ranges = HAIROBB__CAST(float *, HAIROBB_MALLOC(2 * sizeof(float) * b.stats.leaf_references, b.user));
+        if (!bvh->leaf_ranges) goto failed;
+    }
+    hairobb__finish_tree(&b, bvh->nodes, &bvh->root, 0, bvh->leaf_prims, bvh->leaf_ranges, &bvh->leaf_prim_count);
+    if (bvh->leaf_ranges && bvh->leaf_prim_count == segment_count) {
+        /* every segment once: none was clipped */
+        HAIROBB_FREE(bvh->leaf_ranges, b.user);
+        bvh->leaf_ranges = NULL;
+    }
     hairobb__free_tasks(&b);
     if (b.node_allocation) HAIROBB_FREE(b.node_allocation, b.user);
     HAIROBB_FREE(b.ids, b.user);
@@ -2847,6 +2900,11 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     bvh->vertices = vertices;
     bvh->indices = indices;
     bvh->segment_count = segment_count;
+    bvh->vertex_count = vertex_count;
+    bvh->basis = opt.basis;
+    bvh->threads = opt.threads;
+    bvh->parallel_for = opt.parallel_for;
+    bvh->parallel_for_user = opt.parallel_for_user;
     bvh->hit_filter = opt.hit_filter;
     bvh->hit_filter_user = opt.hit_filter_user;
     bvh->allocator_user = b.user;
@@ -2855,7 +2913,8 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     hairobb__setup_pieces(bvh, (int)opt.curve_pieces);
     bvh->stats = b.stats;
     bvh->stats.node_bytes = b.node_bytes;
-    bvh->stats.leaf_bytes = sizeof(uint32_t) * bvh->leaf_prim_count;
+    bvh->stats.leaf_bytes = hairobb__leaf_bytes(bvh);
+    bvh->stats.sah_cost = bvh->stats.build_sah_cost = hairobb__sah_cost(bvh);
     *out = bvh;
     return HAIROBB_OK;
 
@@ -2868,6 +2927,7 @@ failed:
     if (b.world_boxes) HAIROBB_FREE(b.world_boxes, b.user);
     if (b.frame_boxes) HAIROBB_FREE(b.frame_boxes, b.user);
     if (bvh && bvh->leaf_prims) HAIROBB_FREE(bvh->leaf_prims, b.user);
+    if (bvh && bvh->leaf_ranges) HAIROBB_FREE(bvh->leaf_ranges, b.user);
     hairobb__free_tasks(&b);
     if (bvh) HAIROBB_FREE(bvh, b.user);
     return b.error;
@@ -2881,14 +2941,15 @@ HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh)
     if (bvh->curves) HAIROBB_FREE(bvh->curves, user);
     if (bvh->node_allocation) HAIROBB_FREE(bvh->node_allocation, user);
     if (bvh->leaf_prims) HAIROBB_FREE(bvh->leaf_prims, user);
+    if (bvh->leaf_ranges) HAIROBB_FREE(bvh->leaf_ranges, user);
     HAIROBB_FREE(bvh, user);
 }
 
 HAIROBB_DEF size_t hairobb_memory_bytes(const hairobb_bvh *bvh)
 {
     if (!bvh) return 0;
-    return sizeof *bvh + (bvh->node_allocation ? bvh->node_bytes + 64 : 0) + sizeof(uint32_t) * bvh->leaf_prim_count +
-           (bvh->curves ? (16 * sizeof(float) + sizeof(uint32_t)) * bvh->segment_count : 0);
+    return sizeof *bvh + (bvh->node_allocation ? bvh->node_bytes + 64 : 0) + hairobb__leaf_bytes(bvh) +
+           (bvh->curves ? hairobb__curve_bytes(bvh->segment_count) : 0);
 }
 
 HAIROBB_DEF void hairobb_get_stats(const hairobb_bvh *bvh, hairobb_stats *stats)
@@ -2903,6 +2964,301 @@ HAIROBB_DEF void hairobb_bounds(const hairobb_bvh *bvh, float lower[3], float up
     if (!bvh || !lower || !upper) return;
     memcpy(lower, bvh->lower, sizeof bvh->lower);
     memcpy(upper, bvh->upper, sizeof bvh->upper);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Refit: a built tree over new positions, and its SAH cost                  */
+/* ------------------------------------------------------------------------ */
+/* Surface area of child `lane`'s box as the node stores it (padded,
+   quantised), in world units: its extents over the lengths of its frame's
+   rows (127 for byte rotations, 1/extent in an affine map's rows). */
+static float hairobb__child_area(const unsigned char *node_memory, unsigned type, int lane)
+{
+    float extent[3];
+    int k;
+    if (type == HAIROBB__REF_AABB || type == HAIROBB__REF_ROTATED) {
+        const float *lower = type == HAIROBB__REF_AABB
+            ? HAIROBB__CAST(const hairobb__aabb_node *, (const void *)node_memory)->lower[0]
+            : HAIROBB__CAST(const hairobb__rotated_node *, (const void *)node_memory)->lower[0];
+        for (k = 0; k < 3; ++k) extent[k] = lower[3 * HAIROBB__W + k * HAIROBB__W + lane] - lower[k * HAIROBB__W + lane];
+    } else if (type == HAIROBB__REF_OBB) {
+        const hairobb__obb_node *node = HAIROBB__CAST(const hairobb__obb_node *, (const void *)node_memory);
+        for (k = 0; k < 3; ++k) {
+            float a = node->xfm[3 * k][lane], b = node->xfm[3 * k + 1][lane], c = node->xfm[3 * k + 2][lane];
+            extent[k] = 1.0f / sqrtf(a * a + b * b + c * c);
+        }
+    } else {
+        float frame[9];
+        const float *step;
+        const signed char *lower, *upper;
+        if (type == HAIROBB__REF_QOBB_PER_CHILD) {
+            const hairobb__compressed_obb_node *node = HAIROBB__CAST(const hairobb__compressed_obb_node *, (const void *)node_memory);
+            signed char bytes[9];
+            for (k = 0; k < 9; ++k) bytes[k] = node->rotation[k][lane];
+            hairobb__decode_rotation(bytes, frame);
+            step = node->step; lower = node->lower[0]; upper = node->upper[0];
+        } else {
+            const hairobb__compressed_node *node = HAIROBB__CAST(const hairobb__compressed_node *, (const void *)node_memory);
+            float frames[HAIROBB__W][9];
+            hairobb__node_frames(node_memory, type, 1, frames);
+            memcpy(frame, frames[0], sizeof frame);
+            step = node->step; lower = node->lower[0]; upper = node->upper[0];
+        }
+        for (k = 0; k < 3; ++k)
+            extent[k] = (float)(upper[k * HAIROBB__W + lane] - lower[k * HAIROBB__W + lane]) * step[k] /
+                        sqrtf(hairobb__dot3(frame + 3 * k, frame + 3 * k));
+    }
+    return extent[0] * extent[1] + extent[1] * extent[2] + extent[2] * extent[0];
+}
+
+/* The child references of an inner node and how many are not empty (the
+   empty ones come last). */
+static int hairobb__children(const unsigned char *nodes, uint64_t ref, uint64_t child[HAIROBB__W])
+{
+    unsigned type = HAIROBB__REF_TYPE(ref);
+    int count = 0;
+    memcpy(child, nodes + (ref & ~(uint64_t)15) + hairobb__node_size(type) - HAIROBB__W * sizeof(uint64_t),
+           HAIROBB__W * sizeof(uint64_t));
+    while (count < HAIROBB__W && HAIROBB__REF_TYPE(child[count]) != HAIROBB__REF_EMPTY) ++count;
+    return count;
+}
+
+/* The cost of subtree ref inside a box of surface area `area`: a node
+   costs its children's box tests (HAIROBB__COST_AABB or _OBB each), a
+   leaf its segments (HAIROBB__COST_SEGMENT each), as in the builder. */
+static double hairobb__sah_subtree(const hairobb_bvh *bvh, uint64_t ref, double area)
+{
+    unsigned type = HAIROBB__REF_TYPE(ref);
+    uint64_t child[HAIROBB__W];
+    double cost;
+    int count, i;
+    if (type == HAIROBB__REF_LEAF) return area * (double)HAIROBB__COST_SEGMENT * (double)((ref >> 4) & 15u);
+    if (type == HAIROBB__REF_EMPTY) return 0.0;
+    count = hairobb__children(bvh->nodes, ref, child);
+    cost = area * (double)count * (double)(type == HAIROBB__REF_AABB || type == HAIROBB__REF_QAABB ? HAIROBB__COST_AABB : HAIROBB__COST_OBB);
+    for (i = 0; i < count; ++i)
+        cost += hairobb__sah_subtree(bvh, child[i], (double)hairobb__child_area(bvh->nodes + (ref & ~(uint64_t)15), type, i));
+    return cost;
+}
+
+/* The tree's SAH cost from the boxes it stores, over the area of its bounds. */
+static double hairobb__sah_cost(const hairobb_bvh *bvh)
+{
+    double area = (double)hairobb__half_area(bvh->lower, bvh->upper);
+    double cost = hairobb__sah_subtree(bvh, bvh->root, area);
+    return area > 0.0 ? cost / area : cost;
+}
+
+/* A refit keeps the topology and the frames and writes every node's boxes
+   with hairobb__write_boxes from the references below each child (each
+   reference bounded once per node above it), so a refit to the positions a
+   tree was built on gives back its bytes, and the boxes stay as tight as a
+   build's in the same frames. Subtrees of the tree's top run as tasks, as
+   in the build; the nodes above them are written after them, on the
+   calling thread. A node depends on the references alone: any thread count
+   writes the same bytes. */
+typedef struct hairobb__refit_task {
+    uint64_t ref;
+    size_t first;                     /* its first reference, in leaf_prims */
+    float lower[3], upper[3];         /* the world box of its references */
+    int ran;
+} hairobb__refit_task;
+
+typedef struct hairobb__refit {
+    hairobb__builder b;               /* what hairobb__write_boxes reads: ids = leaf_prims, ranges = leaf_ranges */
+    unsigned char *nodes;
+    hairobb__frame_prep world;
+    size_t task_limit;
+    hairobb__refit_task *tasks;       /* NULL: the tasks are only counted */
+    size_t task_count;
+} hairobb__refit;
+
+/* Writes the boxes of node ref over its children's references ranges[],
+   around the centre of their world box [lower, upper]. */
+static void hairobb__refit_node(const hairobb__refit *f, uint64_t ref, const hairobb__range *ranges, int count,
+                                const float lower[3], const float upper[3])
+{
+    unsigned char *node = f->nodes + (ref & ~(uint64_t)15);
+    unsigned type = HAIROBB__REF_TYPE(ref);
+    float centre[3], frames[HAIROBB__W][9];
+    hairobb__box_centre(lower, upper, centre);
+    hairobb__node_frames(node, type, count, frames);
+    hairobb__write_boxes(&f->b, node, type, centre, ranges, count, (const float (*)[9])frames);
+}
+
+/* Refits subtree ref, whose references start at `first` (leaves hold
+   consecutive ranges of leaf_prims in tree order); returns where they end,
+   and their world box in lower, upper (what the builder's world boxes were). */
+static size_t hairobb__refit_subtree(const hairobb__refit *f, uint64_t ref, size_t first, float lower[3], float upper[3])
+{
+    uint64_t child[HAIROBB__W];
+    hairobb__range ranges[HAIROBB__W];
+    int count, i;
+    hairobb__box_empty(lower, upper);
+    if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_LEAF) {
+        size_t end = first + (size_t)((ref >> 4) & 15u), k;
+        HAIROBB_ASSERT((size_t)(ref >> 8) == first);
+        for (k = first; k < end; ++k) {
+            float scratch[16], lo[3], hi[3];
+            hairobb__segment_box_prep(hairobb__ref_points(&f->b, k, scratch), &f->world, NULL, NULL, lo, hi);
+            hairobb__box_grow(lower, upper, lo, hi);
+        }
+        return end;
+    }
+    count = hairobb__children(f->nodes, ref, child);
+    for (i = 0; i < count; ++i) {
+        float lo[3], hi[3];
+        ranges[i].begin = first;
+        first = ranges[i].end = ranges[i].cap = hairobb__refit_subtree(f, child[i], first, lo, hi);
+        hairobb__box_grow(lower, upper, lo, hi);
+    }
+    hairobb__refit_node(f, ref, ranges, count, lower, upper);
+    return first;
+}
+
+/* The first reference of subtree ref: its leftmost leaf's. */
+static size_t hairobb__first_reference(const unsigned char *nodes, uint64_t ref)
+{
+    while (HAIROBB__REF_TYPE(ref) != HAIROBB__REF_LEAF) {
+        uint64_t child[HAIROBB__W];
+        hairobb__children(nodes, ref, child);
+        ref = child[0];
+    }
+    return (size_t)(ref >> 8);
+}
+
+/* The tree's top, subtree ref over the references [first, end): subtrees
+   of at most task_limit references are tasks, counted or (f->tasks) listed
+   before they run; once they ran (finish), their boxes give the nodes
+   above them, written here. */
+static void hairobb__refit_top(hairobb__refit *f, uint64_t ref, size_t first, size_t end, int finish,
+                               float lower[3], float upper[3])
+{
+    uint64_t child[HAIROBB__W];
+    hairobb__range ranges[HAIROBB__W];
+    int count, i;
+    if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_LEAF || end - first <= f->task_limit) {
+        hairobb__refit_task *task = f->tasks ? &f->tasks[f->task_count] : NULL;
+        if (task && finish) {
+            memcpy(lower, task->lower, sizeof task->lower);
+            memcpy(upper, task->upper, sizeof task->upper);
+        } else if (task) {
+            task->ref = ref;
+            task->first = first;
+            task->ran = 0;
+        }
+        f->task_count++;
+        return;
+    }
+    hairobb__box_empty(lower, upper);
+    count = hairobb__children(f->nodes, ref, child);
+    for (i = 0; i < count; ++i) {
+        float lo[3], hi[3];
+        size_t child_end = i + 1 < count ? hairobb__first_reference(f->nodes, child[i + 1]) : end;
+        ranges[i].begin = first;
+        ranges[i].end = ranges[i].cap = child_end;
+        hairobb__refit_top(f, child[i], first, child_end, finish, lo, hi);
+        hairobb__box_grow(lower, upper, lo, hi);
+        first = child_end;
+    }
+    if (finish) hairobb__refit_node(f, ref, ranges, count, lower, upper);
+}
+
+/* One task, called by the pool or a user's parallel_for. */
+static void hairobb__refit_task_at(void *context, unsigned index)
+{
+    hairobb__refit *f = HAIROBB__CAST(hairobb__refit *, context);
+    hairobb__refit_task *task = &f->tasks[index];
+    hairobb__refit_subtree(f, task->ref, task->first, task->lower, task->upper);
+    task->ran = 1;
+}
+
+/* Every node's boxes, the bounds and the SAH cost for bvh->vertices. It
+   cannot fail: without memory for the task list it runs on the calling
+   thread alone, and it runs the tasks a user's parallel_for skipped. */
+static void hairobb__refit_tree(hairobb_bvh *bvh)
+{
+    hairobb__refit f;
+    float identity[9], lower[3], upper[3];
+    size_t count = bvh->leaf_prim_count, k;
+    memset(&f, 0, sizeof f);
+    f.b.vertices = bvh->vertices;
+    f.b.indices = bvh->indices;
+    f.b.ids = bvh->leaf_prims;
+    f.b.ranges = bvh->leaf_ranges;
+    f.b.user = bvh->allocator_user;
+    f.nodes = bvh->nodes;
+    hairobb__identity_frame(identity);
+    hairobb__prepare_frame(identity, &f.world);
+    /* as the build's tasks: about HAIROBB__TASKS of them */
+    f.task_limit = count / HAIROBB__TASKS > HAIROBB__TASK_MIN ? count / HAIROBB__TASKS : HAIROBB__TASK_MIN;
+    if (count > f.task_limit) {
+        hairobb__refit_top(&f, bvh->root, 0, count, 0, lower, upper);
+        f.tasks = HAIROBB__CAST(hairobb__refit_task *, HAIROBB_MALLOC(f.task_count * sizeof *f.tasks, f.b.user));
+    }
+    if (f.tasks) {
+        size_t task_count = f.task_count;
+        f.task_count = 0;
+        hairobb__refit_top(&f, bvh->root, 0, count, 0, lower, upper);
+        if (bvh->parallel_for) {
+            bvh->parallel_for(bvh->parallel_for_user, (unsigned)task_count, hairobb__refit_task_at, &f);
+        } else {
+            hairobb__pool pool;
+            memset(&pool, 0, sizeof pool);
+            pool.task_count = task_count;
+            pool.run = hairobb__refit_task_at;
+            pool.context = &f;
+            hairobb__run_tasks_on_threads(&pool, bvh->threads);
+        }
+        for (k = 0; k < task_count; ++k)
+            if (!f.tasks[k].ran) hairobb__refit_task_at(&f, (unsigned)k);
+        f.task_count = 0;
+        hairobb__refit_top(&f, bvh->root, 0, count, 1, lower, upper);
+        HAIROBB_FREE(f.tasks, f.b.user);
+    } else {
+        hairobb__refit_subtree(&f, bvh->root, 0, lower, upper);
+    }
+    if (bvh->leaf_ranges) {
+        /* the bounds are the whole segments', not their clipped parts' */
+        hairobb__box_empty(lower, upper);
+        for (k = 0; k < bvh->segment_count; ++k) {
+            float lo[3], hi[3];
+            hairobb__segment_box_prep(bvh->vertices + 4 * (size_t)bvh->indices[k], &f.world, NULL, NULL, lo, hi);
+            hairobb__box_grow(lower, upper, lo, hi);
+        }
+    }
+    hairobb__pad_box(lower, upper);
+    memcpy(bvh->lower, lower, sizeof lower);
+    memcpy(bvh->upper, upper, sizeof upper);
+    bvh->stats.sah_cost = hairobb__sah_cost(bvh);
+}
+
+HAIROBB_DEF hairobb_result hairobb_refit_tangents(hairobb_bvh *bvh, const float *vertices, const float *tangents)
+{
+    const uint32_t *indices;
+    hairobb_result result;
+    size_t i;
+    if (!bvh || !vertices || (bvh->basis == HAIROBB_BASIS_HERMITE) != (tangents != NULL)) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    indices = bvh->basis == HAIROBB_BASIS_BEZIER ? bvh->indices : bvh->source_indices;
+    /* all checked before anything is written: on an error the BVH traces the old positions */
+    result = hairobb__validate(vertices, bvh->vertex_count, indices, bvh->segment_count, hairobb__basis_points(bvh->basis), tangents);
+    if (result != HAIROBB_OK) return result;
+    if (bvh->basis == HAIROBB_BASIS_BEZIER) {
+        bvh->vertices = vertices;
+    } else {
+        float *curves = HAIROBB__CAST(float *, bvh->curves);
+        for (i = 0; i < bvh->segment_count; ++i) {
+            size_t at = 4 * (size_t)indices[i];
+            hairobb__to_bezier(bvh->basis, vertices + at, tangents ? tangents + at : NULL, curves + 16 * i);
+        }
+    }
+    hairobb__refit_tree(bvh);
+    return HAIROBB_OK;
+}
+
+HAIROBB_DEF hairobb_result hairobb_refit(hairobb_bvh *bvh, const float *vertices)
+{
+    return hairobb_refit_tangents(bvh, vertices, NULL);
 }
 
 /* ------------------------------------------------------------------------ */
