@@ -365,8 +365,10 @@ typedef struct hairobb_stats {
     size_t leaf_references;   /* segment references in leaves */
     unsigned max_depth;       /* root = 0 */
     size_t node_bytes, leaf_bytes;
-    /* SAH cost of the tree (see REFIT), now and as built: a renderer that
-       refits can rebuild when sah_cost / build_sah_cost passes a threshold */
+    /* SAH cost of the tree (see REFIT), now and as built (equal until a
+       refit): a renderer that refits can rebuild when sah_cost /
+       build_sah_cost passes a threshold. Computed by hairobb_get_stats from
+       the stored boxes (a walk over the nodes, ~1% of a build's time). */
     double sah_cost, build_sah_cost;
 } hairobb_stats;
 HAIROBB_DEF void hairobb_get_stats(const hairobb_bvh *bvh, hairobb_stats *stats);
@@ -769,6 +771,8 @@ struct hairobb_bvh {
     unsigned threads;
     hairobb_parallel_for_fn parallel_for;
     void *parallel_for_user;
+    int refitted;                     /* build_sah_cost below is the tree's as built */
+    double build_sah_cost;
     uint64_t root;
     float lower[3], upper[3];
     hairobb_precision precision;
@@ -842,6 +846,9 @@ static hairobb_result hairobb__validate(const float *vertices, size_t vertex_cou
                                         size_t segment_count, size_t points, const float *tangents)
 {
     size_t i, k;
+    const float max_coord = HAIROBB__MAX_COORD;
+    uint32_t max_bits;
+    memcpy(&max_bits, &max_coord, sizeof max_bits);
     if (segment_count > 0xffffffffu || vertex_count > (size_t)-1 / (4 * sizeof(float)))
         return HAIROBB_ERROR_TOO_LARGE;
     for (i = 0; i < segment_count; ++i) {
@@ -849,14 +856,21 @@ static hairobb_result hairobb__validate(const float *vertices, size_t vertex_cou
     }
     for (i = 0; i < segment_count; ++i) {
         const float *cp = vertices + 4 * (size_t)indices[i], *tp = tangents ? tangents + 4 * (size_t)indices[i] : NULL;
-        for (k = 0; k < 4 * points; ++k) {
-            /* the negated test also rejects NaN */
-            if (!(fabsf(cp[k]) <= HAIROBB__MAX_COORD)) return HAIROBB_ERROR_INVALID_GEOMETRY;
-            if (tp && !(fabsf(tp[k]) <= HAIROBB__MAX_COORD)) return HAIROBB_ERROR_INVALID_GEOMETRY;
+        /* On the bits, without a branch per float (a refit validates every
+           frame): |x| <= HAIROBB__MAX_COORD is (bits & 0x7fffffff) <= the
+           bound's bits, false for NaN and Inf too; a radius < 0 (-0 is
+           not) has bits above 0x80000000. */
+        uint32_t bad = 0, bits[4];
+        for (k = 0; k < points; ++k) {
+            memcpy(bits, cp + 4 * k, sizeof bits);
+            bad |= ((bits[0] & 0x7fffffffu) > max_bits) | ((bits[1] & 0x7fffffffu) > max_bits) |
+                   ((bits[2] & 0x7fffffffu) > max_bits) | ((bits[3] & 0x7fffffffu) > max_bits) | (bits[3] > 0x80000000u);
+            if (!tp) continue;
+            memcpy(bits, tp + 4 * k, sizeof bits);
+            bad |= ((bits[0] & 0x7fffffffu) > max_bits) | ((bits[1] & 0x7fffffffu) > max_bits) |
+                   ((bits[2] & 0x7fffffffu) > max_bits) | ((bits[3] & 0x7fffffffu) > max_bits);
         }
-        for (k = 3; k < 4 * points; k += 4) {
-            if (cp[k] < 0.0f) return HAIROBB_ERROR_INVALID_GEOMETRY;
-        }
+        if (bad) return HAIROBB_ERROR_INVALID_GEOMETRY;
     }
     return HAIROBB_OK;
 }
@@ -2226,8 +2240,10 @@ static void hairobb__store_compressed(float step_out[3], signed char (*lower_byt
         for (i = 0; i < HAIROBB__W; ++i) {
             int lo = 127, hi = -128;      /* empty lane: lower above upper */
             if (i < count) {
-                lo = (int)floorf(lower[i][k] / step);
-                hi = (int)ceilf(upper[i][k] / step);
+                /* floorf and ceilf of quotients within +-128 (a call each without SSE4.1) */
+                float l = lower[i][k] / step, h = upper[i][k] / step;
+                lo = (int)l; lo -= (float)lo > l;
+                hi = (int)h; hi += (float)hi < h;
                 lo = lo < -127 ? -127 : lo;
                 hi = hi > 127 ? 127 : hi;
                 while (lo > -127 && (float)lo * step > lower[i][k]) --lo;
@@ -2300,12 +2316,10 @@ static void hairobb__node_frames(const unsigned char *node, unsigned node_type, 
                 hairobb__frame_from_direction(directions + 3 * i, frames[i]);
         }
     } else if (node_type == HAIROBB__REF_QOBB_PER_CHILD) {
+        /* hairobb__decode_rotation of each lane, in the bytes' order */
         const hairobb__compressed_obb_node *q = HAIROBB__CAST(const hairobb__compressed_obb_node *, (const void *)node);
-        for (i = 0; i < count; ++i) {
-            signed char bytes[9];
-            for (k = 0; k < 9; ++k) bytes[k] = q->rotation[k][i];
-            hairobb__decode_rotation(bytes, frames[i]);
-        }
+        for (k = 0; k < 9; ++k)
+            for (i = 0; i < count; ++i) frames[i][k] = (float)q->rotation[k][i];
     } else if (node_type == HAIROBB__REF_QOBB) {
         hairobb__decode_rotation(HAIROBB__CAST(const hairobb__compressed_node *, (const void *)node)->rotation, frames[0]);
     } else if (node_type == HAIROBB__REF_ROTATED) {
@@ -2318,9 +2332,13 @@ static void hairobb__node_frames(const unsigned char *node, unsigned node_type, 
 /* Writes the boxes of a node's children, child i bounding the references
    of ranges[i] in its frame (hairobb__node_frames) around centre, and the
    node's empty lanes; its frames and child references are left as they
-   are. The builder and hairobb_refit write every node with it. */
+   are. The builder and hairobb_refit write every node with it. axis_boxes
+   (a refit's; NULL: computed here) are the children's boxes in the world
+   axes before padding, what an axis-aligned node stores padded: min and
+   max are exact, so they can be merged from the subtrees below. */
 static void hairobb__write_boxes(const hairobb__builder *b, unsigned char *node_memory, unsigned node_type,
-                                 const float centre[3], const hairobb__range *ranges, int count, const float (*frames)[9])
+                                 const float centre[3], const hairobb__range *ranges, int count, const float (*frames)[9],
+                                 const float (*axis_boxes)[6])
 {
     int i, k;
     if (node_type == HAIROBB__REF_OBB) {
@@ -2376,7 +2394,11 @@ static void hairobb__write_boxes(const hairobb__builder *b, unsigned char *node_
         }
         for (i = 0; i < HAIROBB__W; ++i) {
             float lo[3], hi[3];
-            if (i < count) {
+            if (i < count && axis_boxes && node_type == HAIROBB__REF_AABB) {
+                memcpy(lo, axis_boxes[i], sizeof lo);
+                memcpy(hi, axis_boxes[i] + 3, sizeof hi);
+                hairobb__pad_box(lo, hi);
+            } else if (i < count) {
                 hairobb__node_box(b, &ranges[i], frames[0], box_centre, lo, hi);
             } else { for (k = 0; k < 3; ++k) { lo[k] = INFINITY; hi[k] = -INFINITY; } }
             for (k = 0; k < 3; ++k) { lower[k][i] = lo[k]; upper[k][i] = hi[k]; }
@@ -2466,7 +2488,7 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
     hairobb__store_frames(node, node_type, count, (const float (*)[9])frames);
     hairobb__node_frames(node, node_type, count, frames);
     hairobb__range_centre(b, ranges, count, centre);
-    hairobb__write_boxes(b, node, node_type, centre, ranges, count, (const float (*)[9])frames);
+    hairobb__write_boxes(b, node, node_type, centre, ranges, count, (const float (*)[9])frames, NULL);
     for (i = 0; i < HAIROBB__W; ++i) memcpy(node + child_offset + i * sizeof(uint64_t), &empty, sizeof empty);
     for (i = 0; i < count; ++i) {
         const hairobb__range *c = &children[i].range;
@@ -2914,7 +2936,6 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     bvh->stats = b.stats;
     bvh->stats.node_bytes = b.node_bytes;
     bvh->stats.leaf_bytes = hairobb__leaf_bytes(bvh);
-    bvh->stats.sah_cost = bvh->stats.build_sah_cost = hairobb__sah_cost(bvh);
     *out = bvh;
     return HAIROBB_OK;
 
@@ -2957,6 +2978,9 @@ HAIROBB_DEF void hairobb_get_stats(const hairobb_bvh *bvh, hairobb_stats *stats)
     if (!stats) return;
     if (!bvh) { memset(stats, 0, sizeof *stats); return; }
     *stats = bvh->stats;
+    /* from the boxes, when asked: the build does not pay for it */
+    stats->sah_cost = hairobb__sah_cost(bvh);
+    stats->build_sah_cost = bvh->refitted ? bvh->build_sah_cost : stats->sah_cost;
 }
 
 HAIROBB_DEF void hairobb_bounds(const hairobb_bvh *bvh, float lower[3], float upper[3])
@@ -3057,10 +3081,17 @@ static double hairobb__sah_cost(const hairobb_bvh *bvh)
    in the build; the nodes above them are written after them, on the
    calling thread. A node depends on the references alone: any thread count
    writes the same bytes. */
+/* What a subtree gives the node above it: the world box of its references
+   (the builder's world boxes: the node's centre), and their box in the
+   world axes as an axis-aligned node pads and stores it. */
+typedef struct hairobb__refit_box {
+    float world[6], axis[6];          /* lower, upper */
+} hairobb__refit_box;
+
 typedef struct hairobb__refit_task {
     uint64_t ref;
     size_t first;                     /* its first reference, in leaf_prims */
-    float lower[3], upper[3];         /* the world box of its references */
+    hairobb__refit_box box;
     int ran;
 } hairobb__refit_task;
 
@@ -3068,51 +3099,70 @@ typedef struct hairobb__refit {
     hairobb__builder b;               /* what hairobb__write_boxes reads: ids = leaf_prims, ranges = leaf_ranges */
     unsigned char *nodes;
     hairobb__frame_prep world;
+    float axis_norms[3];              /* hairobb__node_box's radius scale for the world axes */
     size_t task_limit;
     hairobb__refit_task *tasks;       /* NULL: the tasks are only counted */
     size_t task_count;
 } hairobb__refit;
 
+static void hairobb__refit_box_empty(hairobb__refit_box *box)
+{
+    hairobb__box_empty(box->world, box->world + 3);
+    hairobb__box_empty(box->axis, box->axis + 3);
+}
+
+static void hairobb__refit_box_grow(hairobb__refit_box *box, const hairobb__refit_box *part)
+{
+    hairobb__box_grow(box->world, box->world + 3, part->world, part->world + 3);
+    hairobb__box_grow(box->axis, box->axis + 3, part->axis, part->axis + 3);
+}
+
 /* Writes the boxes of node ref over its children's references ranges[],
-   around the centre of their world box [lower, upper]. */
+   around the centre of their world box. */
 static void hairobb__refit_node(const hairobb__refit *f, uint64_t ref, const hairobb__range *ranges, int count,
-                                const float lower[3], const float upper[3])
+                                const hairobb__refit_box *children, const hairobb__refit_box *box)
 {
     unsigned char *node = f->nodes + (ref & ~(uint64_t)15);
     unsigned type = HAIROBB__REF_TYPE(ref);
-    float centre[3], frames[HAIROBB__W][9];
-    hairobb__box_centre(lower, upper, centre);
+    float centre[3], frames[HAIROBB__W][9], axis_boxes[HAIROBB__W][6];
+    int i;
+    for (i = 0; i < count; ++i) memcpy(axis_boxes[i], children[i].axis, sizeof axis_boxes[i]);
+    hairobb__box_centre(box->world, box->world + 3, centre);
     hairobb__node_frames(node, type, count, frames);
-    hairobb__write_boxes(&f->b, node, type, centre, ranges, count, (const float (*)[9])frames);
+    hairobb__write_boxes(&f->b, node, type, centre, ranges, count, (const float (*)[9])frames, (const float (*)[6])axis_boxes);
 }
 
 /* Refits subtree ref, whose references start at `first` (leaves hold
    consecutive ranges of leaf_prims in tree order); returns where they end,
-   and their world box in lower, upper (what the builder's world boxes were). */
-static size_t hairobb__refit_subtree(const hairobb__refit *f, uint64_t ref, size_t first, float lower[3], float upper[3])
+   and their boxes in *box. */
+static size_t hairobb__refit_subtree(const hairobb__refit *f, uint64_t ref, size_t first, hairobb__refit_box *box)
 {
     uint64_t child[HAIROBB__W];
     hairobb__range ranges[HAIROBB__W];
+    hairobb__refit_box boxes[HAIROBB__W];
     int count, i;
-    hairobb__box_empty(lower, upper);
+    hairobb__refit_box_empty(box);
     if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_LEAF) {
         size_t end = first + (size_t)((ref >> 4) & 15u), k;
         HAIROBB_ASSERT((size_t)(ref >> 8) == first);
         for (k = first; k < end; ++k) {
-            float scratch[16], lo[3], hi[3];
-            hairobb__segment_box_prep(hairobb__ref_points(&f->b, k, scratch), &f->world, NULL, NULL, lo, hi);
-            hairobb__box_grow(lower, upper, lo, hi);
+            float scratch[16];
+            const float *cp = hairobb__ref_points(&f->b, k, scratch);
+            hairobb__refit_box part;
+            /* as hairobb__set_range and hairobb__node_box compute them */
+            hairobb__segment_box_prep(cp, &f->world, NULL, NULL, part.world, part.world + 3);
+            hairobb__segment_box_prep(cp, &f->world, NULL, f->axis_norms, part.axis, part.axis + 3);
+            hairobb__refit_box_grow(box, &part);
         }
         return end;
     }
     count = hairobb__children(f->nodes, ref, child);
     for (i = 0; i < count; ++i) {
-        float lo[3], hi[3];
         ranges[i].begin = first;
-        first = ranges[i].end = ranges[i].cap = hairobb__refit_subtree(f, child[i], first, lo, hi);
-        hairobb__box_grow(lower, upper, lo, hi);
+        first = ranges[i].end = ranges[i].cap = hairobb__refit_subtree(f, child[i], first, &boxes[i]);
+        hairobb__refit_box_grow(box, &boxes[i]);
     }
-    hairobb__refit_node(f, ref, ranges, count, lower, upper);
+    hairobb__refit_node(f, ref, ranges, count, boxes, box);
     return first;
 }
 
@@ -3132,16 +3182,16 @@ static size_t hairobb__first_reference(const unsigned char *nodes, uint64_t ref)
    before they run; once they ran (finish), their boxes give the nodes
    above them, written here. */
 static void hairobb__refit_top(hairobb__refit *f, uint64_t ref, size_t first, size_t end, int finish,
-                               float lower[3], float upper[3])
+                               hairobb__refit_box *box)
 {
     uint64_t child[HAIROBB__W];
     hairobb__range ranges[HAIROBB__W];
+    hairobb__refit_box boxes[HAIROBB__W];
     int count, i;
     if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_LEAF || end - first <= f->task_limit) {
         hairobb__refit_task *task = f->tasks ? &f->tasks[f->task_count] : NULL;
         if (task && finish) {
-            memcpy(lower, task->lower, sizeof task->lower);
-            memcpy(upper, task->upper, sizeof task->upper);
+            *box = task->box;
         } else if (task) {
             task->ref = ref;
             task->first = first;
@@ -3150,18 +3200,17 @@ static void hairobb__refit_top(hairobb__refit *f, uint64_t ref, size_t first, si
         f->task_count++;
         return;
     }
-    hairobb__box_empty(lower, upper);
+    hairobb__refit_box_empty(box);
     count = hairobb__children(f->nodes, ref, child);
     for (i = 0; i < count; ++i) {
-        float lo[3], hi[3];
         size_t child_end = i + 1 < count ? hairobb__first_reference(f->nodes, child[i + 1]) : end;
         ranges[i].begin = first;
         ranges[i].end = ranges[i].cap = child_end;
-        hairobb__refit_top(f, child[i], first, child_end, finish, lo, hi);
-        hairobb__box_grow(lower, upper, lo, hi);
+        hairobb__refit_top(f, child[i], first, child_end, finish, &boxes[i]);
+        hairobb__refit_box_grow(box, &boxes[i]);
         first = child_end;
     }
-    if (finish) hairobb__refit_node(f, ref, ranges, count, lower, upper);
+    if (finish) hairobb__refit_node(f, ref, ranges, count, boxes, box);
 }
 
 /* One task, called by the pool or a user's parallel_for. */
@@ -3169,18 +3218,21 @@ static void hairobb__refit_task_at(void *context, unsigned index)
 {
     hairobb__refit *f = HAIROBB__CAST(hairobb__refit *, context);
     hairobb__refit_task *task = &f->tasks[index];
-    hairobb__refit_subtree(f, task->ref, task->first, task->lower, task->upper);
+    hairobb__refit_subtree(f, task->ref, task->first, &task->box);
     task->ran = 1;
 }
 
-/* Every node's boxes, the bounds and the SAH cost for bvh->vertices. It
+/* Every node's boxes and the bounds for bvh->vertices. It
    cannot fail: without memory for the task list it runs on the calling
    thread alone, and it runs the tasks a user's parallel_for skipped. */
 static void hairobb__refit_tree(hairobb_bvh *bvh)
 {
     hairobb__refit f;
-    float identity[9], lower[3], upper[3];
+    hairobb__refit_box box;
+    float identity[9], *lower = box.world, *upper = box.world + 3;
     size_t count = bvh->leaf_prim_count, k;
+    if (!bvh->refitted) bvh->build_sah_cost = hairobb__sah_cost(bvh);
+    bvh->refitted = 1;
     memset(&f, 0, sizeof f);
     f.b.vertices = bvh->vertices;
     f.b.indices = bvh->indices;
@@ -3190,16 +3242,17 @@ static void hairobb__refit_tree(hairobb_bvh *bvh)
     f.nodes = bvh->nodes;
     hairobb__identity_frame(identity);
     hairobb__prepare_frame(identity, &f.world);
+    for (k = 0; k < 3; ++k) f.axis_norms[k] = 1.0f + 1.0f / 1048576.0f;   /* hairobb__node_box's for unit rows */
     /* as the build's tasks: about HAIROBB__TASKS of them */
     f.task_limit = count / HAIROBB__TASKS > HAIROBB__TASK_MIN ? count / HAIROBB__TASKS : HAIROBB__TASK_MIN;
     if (count > f.task_limit) {
-        hairobb__refit_top(&f, bvh->root, 0, count, 0, lower, upper);
+        hairobb__refit_top(&f, bvh->root, 0, count, 0, &box);
         f.tasks = HAIROBB__CAST(hairobb__refit_task *, HAIROBB_MALLOC(f.task_count * sizeof *f.tasks, f.b.user));
     }
     if (f.tasks) {
         size_t task_count = f.task_count;
         f.task_count = 0;
-        hairobb__refit_top(&f, bvh->root, 0, count, 0, lower, upper);
+        hairobb__refit_top(&f, bvh->root, 0, count, 0, &box);
         if (bvh->parallel_for) {
             bvh->parallel_for(bvh->parallel_for_user, (unsigned)task_count, hairobb__refit_task_at, &f);
         } else {
@@ -3213,10 +3266,10 @@ static void hairobb__refit_tree(hairobb_bvh *bvh)
         for (k = 0; k < task_count; ++k)
             if (!f.tasks[k].ran) hairobb__refit_task_at(&f, (unsigned)k);
         f.task_count = 0;
-        hairobb__refit_top(&f, bvh->root, 0, count, 1, lower, upper);
+        hairobb__refit_top(&f, bvh->root, 0, count, 1, &box);
         HAIROBB_FREE(f.tasks, f.b.user);
     } else {
-        hairobb__refit_subtree(&f, bvh->root, 0, lower, upper);
+        hairobb__refit_subtree(&f, bvh->root, 0, &box);
     }
     if (bvh->leaf_ranges) {
         /* the bounds are the whole segments', not their clipped parts' */
@@ -3228,9 +3281,8 @@ static void hairobb__refit_tree(hairobb_bvh *bvh)
         }
     }
     hairobb__pad_box(lower, upper);
-    memcpy(bvh->lower, lower, sizeof lower);
-    memcpy(bvh->upper, upper, sizeof upper);
-    bvh->stats.sah_cost = hairobb__sah_cost(bvh);
+    memcpy(bvh->lower, lower, sizeof bvh->lower);
+    memcpy(bvh->upper, upper, sizeof bvh->upper);
 }
 
 HAIROBB_DEF hairobb_result hairobb_refit_tangents(hairobb_bvh *bvh, const float *vertices, const float *tangents)
