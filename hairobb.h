@@ -39,8 +39,29 @@
 
      MEMORY LIFETIME: the BVH keeps pointers to the caller's vertex and index
      arrays and reads them while tracing (it copies nothing the caller already
-     holds). They must stay alive and unchanged until hairobb_free; to change
-     the hair, build again. (Other curve bases, see `basis`, are copied.)
+     holds). They must stay alive and unchanged until hairobb_free; to move
+     the hair, refit (REFIT) or build again. (Other curve bases, see
+     `basis`, are copied.)
+
+   REFIT
+     hairobb_refit(bvh, new_vertices) moves a built BVH to new positions
+     and radii of the same segments (same indices and vertex_count, on the
+     build's threads or parallel_for): the topology, the leaves and every
+     node's frame stay as built, and every child box is written again, by
+     the builder's own code, from the control points of the segments below
+     it (clipped parts of spatial splits keep their u ranges), so it is as
+     tight as a build's in those frames, and a refit to the build's
+     positions gives back the build's bytes. Bad vertices (as the build
+     checks them) return an error before anything is written. Bezier
+     input: the BVH keeps the new pointer. Other bases keep a copy of the
+     caller's indices (72 bytes per segment in all) and convert the new
+     points again; Hermite takes new tangents with hairobb_refit_tangents.
+     Cost: callgrind, combed 200k, 1 thread, the default layout: about
+     1,160 instructions per segment against the build's 9,250 (12.5%).
+     The frames suit the pose they were chosen for: hairobb_get_stats
+     gives the tree's SAH cost now (sah_cost) and as built
+     (build_sah_cost); rebuild when their ratio passes a threshold of your
+     choosing.
 
    THE SURFACE
      Each segment is a ray-facing ribbon (Embree's "flat" curve). In ray space
@@ -127,10 +148,11 @@
                              and _LINEAR (2 points) follow Embree's curve
                              types of those names; the build converts each
                              segment exactly to Bezier form (a basis change:
-                             the same cubic, the same u) into 68 bytes per
-                             segment it owns, so then the caller's arrays
-                             may go after the build. Radii a conversion
-                             takes below 0 are clamped to 0.
+                             the same cubic, the same u) into 72 bytes per
+                             segment it owns (with a copy of the indices,
+                             for hairobb_refit), so then the caller's
+                             arrays may go after the build. Radii a
+                             conversion takes below 0 are clamped to 0.
      hit_filter, _user       hit_filter(user, ray, hit) for each hit found
                              in [tnear, tfar] (nearer than the best so far
                              for intersect1, any for occluded1), on the
@@ -184,7 +206,8 @@
 
    THREAD SAFETY
      hairobb_intersect1/hairobb_occluded1 only read the BVH: any number of
-     threads may trace one BVH at once. There is no global state.
+     threads may trace one BVH at once; hairobb_refit writes it (no tracing
+     meanwhile). There is no global state.
 
    CONFIGURATION MACROS (define before including the implementation)
      HAIROBB_MALLOC(size, user), HAIROBB_FREE(ptr, user)   allocation; define
