@@ -21,7 +21,7 @@ B         = build
 # (SSE4.1 and AVX2 builds) only where the compiler targets x86.
 X86    := $(filter x86_64% i386% i486% i586% i686% amd64%,$(shell $(CC) -dumpmachine 2>/dev/null))
 QUICK  = $(B)/test_options $(B)/test_conservative $(if $(X86),$(B)/test_simd $(B)/test_simd_w8) $(B)/test_unit \
-         $(B)/test_unit_w8 $(B)/test_stress $(B)/test_reference $(B)/test_hair $(B)/test_filter
+         $(B)/test_unit_w8 $(B)/test_stress $(B)/test_reference $(B)/test_hair $(B)/test_filter $(B)/test_refit $(B)/test_refit_w4
 CHECK_TESTS = $(QUICK) $(B)/check_test_secondary
 # `make test`: the quick tier's programs and those needing Embree (and furBall_A)
 TESTS = $(QUICK) $(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_scenes $(B)/test_threads $(B)/test_bases
@@ -57,6 +57,12 @@ $(B)/test_unit: tests/test_unit.c hairobb.h tests/reference.h tests/scenes.h tes
 
 $(B)/test_unit_w8: tests/test_unit.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=8 $< -o $@ $(LIBS) -lpthread
+
+# refit: a tree built on one pose refitted to others, against fresh builds and the reference (8- and 4-wide)
+$(B)/test_refit: tests/test_refit.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
+	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=8 $< -o $@ $(LIBS)
+$(B)/test_refit_w4: tests/test_refit.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
+	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=4 $< -o $@ $(LIBS)
 
 # black-box: every combination of build options against the reference
 $(B)/test_options: tests/test_options.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)

@@ -332,11 +332,13 @@ static const uint64_t *node_children(const hairobb_bvh *bvh, uint64_t ref)
     }
 }
 
+/* node memory a node takes (an affine OBB node is followed by the main
+   directions of its children's frames, for hairobb_refit) */
 static size_t node_size(unsigned type)
 {
     switch (type) {
     case HAIROBB__REF_AABB: return sizeof(hairobb__aabb_node);
-    case HAIROBB__REF_OBB: return sizeof(hairobb__obb_node);
+    case HAIROBB__REF_OBB: return sizeof(hairobb__obb_node) + HAIROBB__W * 3 * sizeof(float);
     case HAIROBB__REF_ROTATED: return sizeof(hairobb__rotated_node);
     case HAIROBB__REF_QAABB:
     case HAIROBB__REF_QOBB: return sizeof(hairobb__compressed_node);
