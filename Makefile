@@ -21,7 +21,7 @@ B         = build
 # (SSE4.1 and AVX2 builds) only where the compiler targets x86.
 X86    := $(filter x86_64% i386% i486% i586% i686% amd64%,$(shell $(CC) -dumpmachine 2>/dev/null))
 QUICK  = $(B)/test_options $(B)/test_conservative $(if $(X86),$(B)/test_simd $(B)/test_simd_w8) $(B)/test_unit \
-         $(B)/test_unit_w8 $(B)/test_stress $(B)/test_reference $(B)/test_hair $(B)/test_filter
+         $(B)/test_unit_w8 $(B)/test_stress $(B)/test_reference $(B)/test_hair $(B)/test_filter $(B)/test_save
 CHECK_TESTS = $(QUICK) $(B)/check_test_secondary
 # `make test`: the quick tier's programs and those needing Embree (and furBall_A)
 TESTS = $(QUICK) $(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_scenes $(B)/test_threads $(B)/test_bases
@@ -135,6 +135,10 @@ $(B)/test_secondary: tests/test_secondary.c hairobb.h tests/reference.h tests/sc
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
 $(B)/check_test_secondary: tests/test_secondary.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) -DTESTS_NO_EMBREE $< -o $@ $(LIBS)
+
+# BVHs saved and loaded: round trips traced to the bit, bad bytes, other hair
+$(B)/test_save: tests/test_save.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
 
 # the .hair reader against the tests' own, bad files, a BVH from a loaded file
 $(B)/test_hair: tests/test_hair.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
