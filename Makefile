@@ -29,7 +29,7 @@ TESTS = $(QUICK) $(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_
 # (any report aborts the test), the threads test under ThreadSanitizer, and
 # the fuzzers (clang); named first, as the longest, since the tests run two
 # at a time on 2 cores
-SANITIZED = $(B)/fuzz_build_60s $(B)/asan_test_options $(B)/fuzz_hair_30s $(B)/asan_test_unit_w8 $(B)/asan_test_stress \
+SANITIZED = $(B)/fuzz_build_60s $(B)/asan_test_options $(B)/fuzz_hair_30s $(B)/fuzz_load_30s $(B)/asan_test_unit_w8 $(B)/asan_test_stress \
             $(B)/tsan_test_threads $(B)/asan_test_reference
 ASAN      = -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 TSAN      = -O1 -g -fsanitize=thread
@@ -83,10 +83,15 @@ $(B)/fuzz_build_60s: $(B)/fuzz_build tests/fuzz_run.sh
 	@printf '#!/bin/sh\nexec sh tests/fuzz_run.sh $(B)/fuzz_build tests/fuzz_corpus/bvh_build 60\n' > $@ && chmod +x $@
 $(B)/fuzz_hair_30s: $(B)/fuzz_hair tests/fuzz_run.sh
 	@printf '#!/bin/sh\nexec sh tests/fuzz_run.sh $(B)/fuzz_hair tests/fuzz_corpus/hair_read 30\n' > $@ && chmod +x $@
+# saved BVHs, checksum fixed up, loaded over a fixed scene (scenes.h)
+$(B)/fuzz_load: tests/scenes.h
+$(B)/fuzz_load_30s: $(B)/fuzz_load tests/fuzz_run.sh
+	@printf '#!/bin/sh\nexec sh tests/fuzz_run.sh $(B)/fuzz_load tests/fuzz_corpus/bvh_load 30\n' > $@ && chmod +x $@
 # long runs: FUZZ_SECONDS each
-fuzz: $(B)/fuzz_build $(B)/fuzz_hair
+fuzz: $(B)/fuzz_build $(B)/fuzz_hair $(B)/fuzz_load
 	sh tests/fuzz_run.sh $(B)/fuzz_build tests/fuzz_corpus/bvh_build $(FUZZ_SECONDS)
 	sh tests/fuzz_run.sh $(B)/fuzz_hair tests/fuzz_corpus/hair_read $(FUZZ_SECONDS)
+	sh tests/fuzz_run.sh $(B)/fuzz_load tests/fuzz_corpus/bvh_load $(FUZZ_SECONDS)
 
 $(B)/test_scenes: tests/test_scenes.c tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)

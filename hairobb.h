@@ -145,6 +145,9 @@
                              HAIROBB_ERROR_UNSUPPORTED where the build
                              lacks it or the CPU cannot run it.
                              hairobb_get_simd(bvh) tells a BVH's path.
+     verify_hair             hairobb_load only (SAVE AND LOAD): HAIROBB_AUTO
+                             (default) and _ON compare the hair with the
+                             saved hash, _OFF skips that pass.
 
    HITS
      hairobb_hit: t, u, v as above; Ng the ribbon's unit normal facing the ray
@@ -169,6 +172,48 @@
      disagree is HAIROBB_ERROR_INVALID_FILE; NaN, Inf or negative thickness
      HAIROBB_ERROR_INVALID_GEOMETRY.
 
+   SAVE AND LOAD
+         size_t size = hairobb_save_size(bvh);
+         void *bytes = malloc(size);
+         hairobb_save(bvh, bytes, size);                  // or hairobb_save_file(bvh, path)
+         ...
+         hairobb_load(bytes, size, vertices, vertex_count, indices, segment_count, &options, &loaded);
+     A load takes the hair arrays the build took (and keeps pointers to
+     them, as a built BVH does) and traces bit for bit as the saved BVH did,
+     on the path options.simd picks. Of the options it reads basis and
+     tangents (they must describe the saved hair), simd, hit_filter(_user),
+     allocator_user and verify_hair; every other setting (layout, policy,
+     precision, curve pieces, leaf size) is the saved BVH's. Curves of other
+     bases are not saved (68 bytes per segment): the load converts the
+     caller's arrays again, with the build's code.
+     The format: a header (magic, format version, byte-order word, node
+     width, the build's options, counts, a 64-bit hash of the Bezier
+     segments traced), the node memory, the leaves' segment ids and a
+     64-bit checksum of all of it, in this host's byte order. It is for
+     builds of this library with the same node width: another format
+     version, HAIROBB_NODE_WIDTH or byte order is HAIROBB_ERROR_UNSUPPORTED.
+     Other hair is HAIROBB_ERROR_MISMATCH: another segment count or basis,
+     or arrays that differ from the hash (for Bezier input any bit of the
+     vertex_count control points or of the indices; for other bases any bit
+     of the converted curves, so tangents too). verify_hair = HAIROBB_OFF
+     skips the hash (a pass over the arrays) for a renderer that knows its
+     hair is the one saved; the arrays are still validated as
+     hairobb_build validates them, and every segment id is checked against
+     segment_count, so a BVH loaded over other hair traces safely, only
+     wrongly. The loader trusts nothing else either: sizes and counts
+     (overflow-safe), header fields, the checksum, then a walk of the whole
+     tree: every reference of a node type the saved layout and policy
+     build and inside the node memory, every node reached once (no
+     cycles, sharing or overlap, no byte unreached), no deeper than the
+     traversal stack holds, inner nodes of 2 to W children (empty lanes
+     last), leaves of 1 to max_leaf_size segments taking the ids in tree
+     order, each id below segment_count. Anything wrong is
+     HAIROBB_ERROR_INVALID_FILE, with nothing allocated left behind. The
+     floats of nodes are not checked: a NaN or infinite box only makes
+     rays miss children or visit more of them (hits come from the
+     segments, and the walk bounds what a traversal reads); the bounds
+     hairobb_bounds reports must be finite.
+
    SIMD PATHS
      The traversal and intersector exist in plain C, SSE2, SSE4.1, AVX and
      AVX2 versions, which give the same hits bit for bit (no FMA). The
@@ -192,7 +237,8 @@
      HAIROBB_ASSERT(x)       internal checks, default assert().
      HAIROBB_STATIC          make every function static to the including file.
      HAIROBB_NO_SIMD         plain C everywhere (same answers as the SIMD paths).
-     HAIROBB_NO_STDIO        leave out hairobb_hair_load (no <stdio.h>).
+     HAIROBB_NO_STDIO        leave out hairobb_hair_load, hairobb_save_file and
+                             hairobb_load_file (no <stdio.h>).
      HAIROBB_NO_THREADS      build on the calling thread only. Otherwise, on
                              POSIX systems, the build uses pthreads: link
                              with -pthread (glibc 2.34 and later need nothing).
@@ -204,7 +250,8 @@
                              compiled in, else 4.
 
    ERRORS
-     hairobb_build returns a hairobb_result; hairobb_result_string names it.
+     hairobb_build, hairobb_load and the readers return a hairobb_result;
+     hairobb_result_string names it.
      The library never prints and never exits.
 */
 #ifndef HAIROBB_H

@@ -2,7 +2,8 @@
    file variants):
    - round trips of several scenes x option sets (every OBB layout, node
      policies, spatial splits, clustering, every basis, pieces precision,
-     leaf sizes 1 and 15): the loaded BVH has the saved one's statistics
+     leaf sizes 1 and 15): a build on 3 threads saves to the same bytes as
+     on 1; the loaded BVH has the saved one's statistics
      and memory, saves to the same bytes, and traces every ray to the same
      bits (t, u, v, Ng, tangent, prim_id; intersect1, occluded1 and a
      secondary ray from each hit) on every SIMD path this build has; on
@@ -243,6 +244,28 @@ static void round_trip(const char *name, const hair_scene *s, const hair_input *
     blob = save_of(built, &size);
     CHECK(blob != NULL, "%s: save", name);
     if (!blob) { hairobb_free(built); return; }
+    {
+        /* the same tree on any thread count: the same bytes */
+        hairobb_bvh *threaded = NULL;
+        unsigned char *threaded_blob = NULL;
+        size_t threaded_size = 0;
+        build_opt.threads = 3;
+        r = hairobb_build(in->vertices, in->vertex_count, in->indices, in->segment_count, &build_opt, &threaded);
+        if (r == HAIROBB_OK) threaded_blob = save_of(threaded, &threaded_size);
+        CHECK(threaded_blob && threaded_size == size && memcmp(threaded_blob, blob, size) == 0,
+              "%s: a build on 3 threads saves to other bytes", name);
+        free(threaded_blob);
+        hairobb_free(threaded);
+    }
+    {
+        hairobb_build_options on;
+        memset(&on, 0, sizeof on);
+        on.verify_hair = HAIROBB_ON;
+        r = load_of(blob, size, in, &on, &loaded);
+        CHECK(r == HAIROBB_OK && loaded, "%s: load, verify_hair on: %s", name, hairobb_result_string(r));
+        hairobb_free(loaded);
+        loaded = NULL;
+    }
     r = load_of(blob, size, in, NULL, &loaded);
     CHECK(r == HAIROBB_OK && loaded, "%s: load: %s", name, hairobb_result_string(r));
     if (r == HAIROBB_OK) {
