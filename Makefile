@@ -30,7 +30,7 @@ TESTS = $(QUICK) $(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_
 # the fuzzers (clang); named first, as the longest, since the tests run two
 # at a time on 2 cores
 SANITIZED = $(B)/fuzz_build_60s $(B)/asan_test_options $(B)/fuzz_hair_30s $(B)/fuzz_load_30s $(B)/asan_test_unit_w8 $(B)/asan_test_stress \
-            $(B)/tsan_test_threads $(B)/asan_test_reference
+            $(B)/tsan_test_threads $(B)/asan_test_reference $(B)/asan_test_save_w4
 ASAN      = -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 TSAN      = -O1 -g -fsanitize=thread
 # libFuzzer targets (clang): 60 s in `make test`, `make fuzz` for a long run
@@ -74,6 +74,9 @@ $(B)/asan_test_options: tests/test_options.c hairobb.h tests/reference.h tests/s
 	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) -DCROSSED_RAYS=1024 $< -o $@ $(LIBS)
 $(B)/asan_test_stress: tests/test_stress.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
+# 4-wide (test_save runs 8-wide), one scene's round trips: the loader's bounds under ASan
+$(B)/asan_test_save_w4: tests/test_save.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
+	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) -DHAIROBB_NODE_WIDTH=4 -DSAVE_SCENES=1 $< -o $@ $(LIBS)
 $(B)/tsan_test_threads: tests/test_threads.c hairobb.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(WARN) $(TSAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
 

@@ -347,6 +347,11 @@ static const option_set option_sets[] = {
     {"linear", HAIROBB_NODES_MIXED, HAIROBB_OBB_PER_CHILD, HAIROBB_AUTO, HAIROBB_AUTO, 0, 0, HAIROBB_PRECISION_PIECES, HAIROBB_BASIS_LINEAR},
 };
 
+/* the sanitized build (asan_test_save_w4) round-trips the first scene only */
+#ifndef SAVE_SCENES
+#define SAVE_SCENES 4
+#endif
+
 static void round_trips(void)
 {
     hair_scene scenes[4];
@@ -359,6 +364,7 @@ static void round_trips(void)
     made[3] = scene_random(&scenes[3], 2000, 11) == 0;
     for (k = 0; k < 4; ++k) {
         float *tangents;
+        if (k >= SAVE_SCENES) { if (made[k]) scene_free(&scenes[k]); continue; }
         CHECK(made[k], "scene %d made", k);
         if (!made[k]) continue;
         tangents = make_tangents(&scenes[k]);
