@@ -3296,7 +3296,7 @@ HAIROBB_DEF hairobb_result hairobb_load_file(const char *path,
                                              const hairobb_build_options *options, hairobb_bvh **out)
 {
     void *user = options ? options->allocator_user : NULL;
-    unsigned char *data;
+    unsigned char header[HAIROBB__SAVE_HEADER], *data;
     hairobb_result result = HAIROBB_OK;
     FILE *file;
     long length = 0;
@@ -3304,10 +3304,20 @@ HAIROBB_DEF hairobb_result hairobb_load_file(const char *path,
     if (!path || !out) return HAIROBB_ERROR_INVALID_ARGUMENT;
     file = fopen(path, "rb");
     if (!file) return HAIROBB_ERROR_IO;
-    if (fseek(file, 0, SEEK_END) != 0 || (length = ftell(file)) < 0 || fseek(file, 0, SEEK_SET) != 0)
+    if (fread(header, 1, sizeof header, file) != sizeof header)
+        result = ferror(file) ? HAIROBB_ERROR_IO : HAIROBB_ERROR_INVALID_FILE;   /* a directory, or too short */
+    else if (fseek(file, 0, SEEK_END) != 0 || (length = ftell(file)) < 0 || fseek(file, 0, SEEK_SET) != 0)
         result = HAIROBB_ERROR_IO;
-    else if (length < HAIROBB__SAVE_HEADER + 8)
-        result = HAIROBB_ERROR_INVALID_FILE;
+    else if (memcmp(header, hairobb__save_magic, sizeof hairobb__save_magic) == 0 &&
+             hairobb__get32(header + HAIROBB__AT_VERSION) == HAIROBB__SAVE_VERSION &&
+             hairobb__get32(header + HAIROBB__AT_BYTE_ORDER) == HAIROBB__SAVE_BYTE_ORDER &&
+             hairobb__get32(header + HAIROBB__AT_WIDTH) == HAIROBB__W &&
+             (hairobb__get64(header + HAIROBB__AT_NODE_BYTES) > (uint64_t)length ||
+              hairobb__get64(header + HAIROBB__AT_LEAF_PRIMS) > (uint64_t)length / sizeof(uint32_t) ||
+              HAIROBB__SAVE_HEADER + hairobb__get64(header + HAIROBB__AT_NODE_BYTES) +
+                      ((sizeof(uint32_t) * hairobb__get64(header + HAIROBB__AT_LEAF_PRIMS) + 7) & ~(uint64_t)7) + 8 !=
+                  (uint64_t)length))
+        result = HAIROBB_ERROR_INVALID_FILE;   /* sizes that disagree with the file's: before any large allocation */
     else if ((unsigned long)length > (size_t)-1)
         result = HAIROBB_ERROR_TOO_LARGE;
     if (result == HAIROBB_OK) {

@@ -18,7 +18,10 @@
    - other hair (vertices, indices, tangents, segment count, basis): the
      mismatch error, and loads with the check skipped where that is safe;
    - every allocation of a load failing in turn: out of memory, no leak;
-   - the file variants round trip; a missing file is HAIROBB_ERROR_IO. */
+   - a one-segment BVH (a leaf root, no node memory) round trips;
+   - the file variants round trip; a missing file or a directory is
+     HAIROBB_ERROR_IO, an empty or truncated file, or one announcing 2^40
+     node bytes, HAIROBB_ERROR_INVALID_FILE before any allocation. */
 #define _POSIX_C_SOURCE 200809L
 #include <stdio.h>
 #include <stdlib.h>
@@ -27,12 +30,13 @@
 
 /* counts live blocks and fails the fail_at-th allocation (single thread:
    the builds here use threads = 1) */
-typedef struct test_allocator { long calls, fail_at, live; } test_allocator;
+typedef struct test_allocator { long calls, fail_at, live; size_t largest; } test_allocator;
 static void *test_malloc(size_t size, void *user)
 {
     test_allocator *a = (test_allocator *)user;
     void *p;
     if (!a) return malloc(size);
+    if (size > a->largest) a->largest = size;
     if (a->calls++ == a->fail_at) return NULL;
     p = malloc(size);
     if (p) { memset(p, 0xa5, size); a->live++; }
@@ -1062,6 +1066,33 @@ static void failing_allocations(void)
     scene_free(&s);
 }
 
+/* One segment: the root a leaf, no node memory. */
+static void one_segment(void)
+{
+    static const float v[20] = {0, 0, 0, 0.1f, 1, 0.2f, 0, 0.1f, 2, -0.2f, 0, 0.1f, 3, 0, 0, 0.1f, 0, 0, 0, 0};
+    static const uint32_t ix[1] = {0};
+    hairobb_bvh *bvh = NULL, *loaded = NULL;
+    unsigned char *blob;
+    size_t size;
+    hairobb_result r;
+    CHECK(hairobb_build(v, 4, ix, 1, NULL, &bvh) == HAIROBB_OK && HAIROBB__REF_TYPE(bvh->root) == HAIROBB__REF_LEAF &&
+          bvh->node_bytes == 0, "one segment: a leaf root");
+    blob = save_of(bvh, &size);
+    r = hairobb_load(blob, size, v, 4, ix, 1, NULL, &loaded);
+    CHECK(r == HAIROBB_OK && size == HAIROBB__SAVE_HEADER + 8 + 8, "one segment: %zu bytes, %s", size, hairobb_result_string(r));
+    if (loaded) {
+        hairobb_ray ray = {{1.0f, 0.0f, -5.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY};
+        hairobb_hit a, b;
+        memset(&a, 0, sizeof a);
+        memset(&b, 0, sizeof b);
+        CHECK(hairobb_intersect1(bvh, &ray, &a) == 1 && hairobb_intersect1(loaded, &ray, &b) == 1 && memcmp(&a, &b, sizeof a) == 0,
+              "one segment: the same hit");
+    }
+    hairobb_free(loaded);
+    free(blob);
+    hairobb_free(bvh);
+}
+
 static void files(void)
 {
     hair_scene s;
@@ -1101,6 +1132,30 @@ static void files(void)
     remove(path);
     r = hairobb_load_file(path, s.vertices, s.vertex_count, s.indices, s.segment_count, NULL, &loaded);
     CHECK(r == HAIROBB_ERROR_IO && !loaded, "a missing file: %s", hairobb_result_string(r));
+    r = hairobb_load_file("/tmp", s.vertices, s.vertex_count, s.indices, s.segment_count, NULL, &loaded);
+    CHECK(r == HAIROBB_ERROR_IO && !loaded, "a directory: %s", hairobb_result_string(r));
+    r = hairobb_load_file("/dev/null", s.vertices, s.vertex_count, s.indices, s.segment_count, NULL, &loaded);
+    CHECK(r == HAIROBB_ERROR_INVALID_FILE && !loaded, "an empty file: %s", hairobb_result_string(r));
+    /* a header announcing 2^40 node bytes: an error before any large allocation */
+    {
+        test_allocator a;
+        hairobb_build_options counted;
+        unsigned char *lying = (unsigned char *)malloc(size);
+        memcpy(lying, blob, size);
+        hairobb__put64(lying + HAIROBB__AT_NODE_BYTES, (uint64_t)1 << 40);
+        reseal(lying, size);
+        f = fopen(path, "wb");
+        if (f) { fwrite(lying, 1, size, f); fclose(f); }
+        memset(&a, 0, sizeof a);
+        a.fail_at = -1;
+        memset(&counted, 0, sizeof counted);
+        counted.allocator_user = &a;
+        r = hairobb_load_file(path, s.vertices, s.vertex_count, s.indices, s.segment_count, &counted, &loaded);
+        CHECK(r == HAIROBB_ERROR_INVALID_FILE && !loaded && a.largest == 0 && a.live == 0,
+              "a file announcing 2^40 node bytes: %s, largest allocation %zu", hairobb_result_string(r), a.largest);
+        free(lying);
+        remove(path);
+    }
     r = hairobb_save_file(bvh, "/nonexistent-directory/hairobb.bvh");
     CHECK(r == HAIROBB_ERROR_IO, "a file that cannot be created: %s", hairobb_result_string(r));
     CHECK(hairobb_save_file(NULL, path) == HAIROBB_ERROR_INVALID_ARGUMENT && hairobb_save_file(bvh, NULL) == HAIROBB_ERROR_INVALID_ARGUMENT,
@@ -1122,6 +1177,7 @@ int main(void)
     other_hair();
     filter_from_load();
     failing_allocations();
+    one_segment();
     files();
     printf("test_save: %.1f s\n", scene_now() - t0);
     return check_summary();
