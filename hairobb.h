@@ -2963,9 +2963,12 @@ HAIROBB_DEF void hairobb_bounds(const hairobb_bvh *bvh, float lower[3], float up
 static const unsigned char hairobb__save_magic[8] = {'H', 'A', 'I', 'R', 'O', 'B', 'B', 0x1a};
 
 /* A 64-bit hash of 8-byte words: each step (xor the word, multiply by an
-   odd constant, xor-shift) is a bijection of the state, so changing any
-   one word always changes the result (every single-byte flip is caught).
-   The tail is one zero-padded word, then the length. */
+   odd constant, xor-shift) is a bijection of the state, and of the word
+   for a given state, so changing any one word always changes the result
+   (every single-byte flip is caught). Four lanes take 32-byte blocks (one
+   chain's multiply latency would hold it below memory speed), then are
+   folded into one, which takes the rest, one zero-padded word, and the
+   length. */
 HAIROBB__INLINE uint64_t hairobb__hash_word(uint64_t h, uint64_t word)
 {
     h = (h ^ word) * UINT64_C(0x9e3779b97f4a7c15);
@@ -2975,16 +2978,23 @@ HAIROBB__INLINE uint64_t hairobb__hash_word(uint64_t h, uint64_t word)
 static uint64_t hairobb__hash(uint64_t h, const void *data, size_t bytes)
 {
     const unsigned char *p = HAIROBB__CAST(const unsigned char *, data);
-    uint64_t word;
-    size_t i;
-    for (i = 0; i + 8 <= bytes; i += 8) {
-        memcpy(&word, p + i, 8);
-        h = hairobb__hash_word(h, word);
+    uint64_t lane[4], word[4];
+    size_t i = 0;
+    int k;
+    for (k = 0; k < 4; ++k) lane[k] = h + (uint64_t)k;
+    for (; i + 32 <= bytes; i += 32) {
+        memcpy(word, p + i, 32);
+        for (k = 0; k < 4; ++k) lane[k] = hairobb__hash_word(lane[k], word[k]);
+    }
+    h = hairobb__hash_word(hairobb__hash_word(hairobb__hash_word(lane[0], lane[1]), lane[2]), lane[3]);
+    for (; i + 8 <= bytes; i += 8) {
+        memcpy(word, p + i, 8);
+        h = hairobb__hash_word(h, word[0]);
     }
     if (i < bytes) {
-        word = 0;
-        memcpy(&word, p + i, bytes - i);
-        h = hairobb__hash_word(h, word);
+        word[0] = 0;
+        memcpy(word, p + i, bytes - i);
+        h = hairobb__hash_word(h, word[0]);
     }
     return hairobb__hash_word(h, (uint64_t)bytes);
 }
