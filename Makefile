@@ -21,7 +21,8 @@ B         = build
 # (SSE4.1 and AVX2 builds) only where the compiler targets x86.
 X86    := $(filter x86_64% i386% i486% i586% i686% amd64%,$(shell $(CC) -dumpmachine 2>/dev/null))
 QUICK  = $(B)/test_options $(B)/test_conservative $(if $(X86),$(B)/test_simd $(B)/test_simd_w8) $(B)/test_unit \
-         $(B)/test_unit_w8 $(B)/test_stress $(B)/test_reference $(B)/test_hair $(B)/test_filter $(B)/test_refit $(B)/test_refit_w4
+         $(B)/test_unit_w8 $(B)/test_stress $(B)/test_reference $(B)/test_hair $(B)/test_filter $(B)/test_refit $(B)/test_refit_w4 \
+         $(B)/test_save
 CHECK_TESTS = $(QUICK) $(B)/check_test_secondary
 # `make test`: the quick tier's programs and those needing Embree (and furBall_A)
 TESTS = $(QUICK) $(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_scenes $(B)/test_threads $(B)/test_bases
@@ -29,8 +30,8 @@ TESTS = $(QUICK) $(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_
 # (any report aborts the test), the threads test under ThreadSanitizer, and
 # the fuzzers (clang); named first, as the longest, since the tests run two
 # at a time on 2 cores
-SANITIZED = $(B)/fuzz_build_60s $(B)/asan_test_options $(B)/fuzz_hair_30s $(B)/asan_test_unit_w8 $(B)/asan_test_stress \
-            $(B)/tsan_test_threads $(B)/asan_test_reference
+SANITIZED = $(B)/fuzz_build_60s $(B)/asan_test_options $(B)/fuzz_hair_30s $(B)/fuzz_load_30s $(B)/asan_test_unit_w8 $(B)/asan_test_stress \
+            $(B)/tsan_test_threads $(B)/asan_test_reference $(B)/asan_test_save_w4
 ASAN      = -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 TSAN      = -O1 -g -fsanitize=thread
 # libFuzzer targets (clang): 60 s in `make test`, `make fuzz` for a long run
@@ -80,6 +81,9 @@ $(B)/asan_test_options: tests/test_options.c hairobb.h tests/reference.h tests/s
 	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) -DCROSSED_RAYS=1024 $< -o $@ $(LIBS)
 $(B)/asan_test_stress: tests/test_stress.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
+# 4-wide (test_save runs 8-wide), one scene's round trips: the loader's bounds under ASan
+$(B)/asan_test_save_w4: tests/test_save.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
+	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) -DHAIROBB_NODE_WIDTH=4 -DSAVE_SCENES=1 $< -o $@ $(LIBS)
 $(B)/tsan_test_threads: tests/test_threads.c hairobb.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(WARN) $(TSAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
 
@@ -89,10 +93,15 @@ $(B)/fuzz_build_60s: $(B)/fuzz_build tests/fuzz_run.sh
 	@printf '#!/bin/sh\nexec sh tests/fuzz_run.sh $(B)/fuzz_build tests/fuzz_corpus/bvh_build 60\n' > $@ && chmod +x $@
 $(B)/fuzz_hair_30s: $(B)/fuzz_hair tests/fuzz_run.sh
 	@printf '#!/bin/sh\nexec sh tests/fuzz_run.sh $(B)/fuzz_hair tests/fuzz_corpus/hair_read 30\n' > $@ && chmod +x $@
+# saved BVHs, checksum fixed up, loaded over a fixed scene (scenes.h)
+$(B)/fuzz_load: tests/scenes.h
+$(B)/fuzz_load_30s: $(B)/fuzz_load tests/fuzz_run.sh
+	@printf '#!/bin/sh\nexec sh tests/fuzz_run.sh $(B)/fuzz_load tests/fuzz_corpus/bvh_load 30\n' > $@ && chmod +x $@
 # long runs: FUZZ_SECONDS each
-fuzz: $(B)/fuzz_build $(B)/fuzz_hair
+fuzz: $(B)/fuzz_build $(B)/fuzz_hair $(B)/fuzz_load
 	sh tests/fuzz_run.sh $(B)/fuzz_build tests/fuzz_corpus/bvh_build $(FUZZ_SECONDS)
 	sh tests/fuzz_run.sh $(B)/fuzz_hair tests/fuzz_corpus/hair_read $(FUZZ_SECONDS)
+	sh tests/fuzz_run.sh $(B)/fuzz_load tests/fuzz_corpus/bvh_load $(FUZZ_SECONDS)
 
 $(B)/test_scenes: tests/test_scenes.c tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
@@ -141,6 +150,10 @@ $(B)/test_secondary: tests/test_secondary.c hairobb.h tests/reference.h tests/sc
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
 $(B)/check_test_secondary: tests/test_secondary.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) -DTESTS_NO_EMBREE $< -o $@ $(LIBS)
+
+# BVHs saved and loaded: round trips traced to the bit, bad bytes, other hair
+$(B)/test_save: tests/test_save.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
 
 # the .hair reader against the tests' own, bad files, a BVH from a loaded file
 $(B)/test_hair: tests/test_hair.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)

@@ -176,6 +176,9 @@
                              HAIROBB_ERROR_UNSUPPORTED where the build
                              lacks it or the CPU cannot run it.
                              hairobb_get_simd(bvh) tells a BVH's path.
+     verify_hair             hairobb_load only (SAVE AND LOAD): HAIROBB_AUTO
+                             (default) and _ON compare the hair with the
+                             saved hash, _OFF skips that pass.
 
    HITS
      hairobb_hit: t, u, v as above; Ng the ribbon's unit normal facing the ray
@@ -199,6 +202,52 @@
      the BVH, then hairobb_hair_free. A file whose size, counts or flags
      disagree is HAIROBB_ERROR_INVALID_FILE; NaN, Inf or negative thickness
      HAIROBB_ERROR_INVALID_GEOMETRY.
+
+   SAVE AND LOAD
+         size_t size = hairobb_save_size(bvh);
+         void *bytes = malloc(size);
+         hairobb_save(bvh, bytes, size);                  // or hairobb_save_file(bvh, path)
+         ...
+         hairobb_load(bytes, size, vertices, vertex_count, indices, segment_count, &options, &loaded);
+     A load takes the hair arrays the build took (and keeps pointers to
+     them, as a built BVH does) and traces bit for bit as the saved BVH did,
+     on the path options.simd picks. Of the options it reads basis and
+     tangents (they must describe the saved hair), simd, hit_filter(_user),
+     allocator_user, verify_hair, and threads and parallel_for(_user) for
+     a later hairobb_refit (a loaded BVH refits as the saved one would);
+     every other setting (layout, policy, precision, curve pieces, leaf
+     size) is the saved BVH's. Curves of other bases are not saved (72
+     bytes per segment): the load converts the caller's arrays again, with
+     the build's code.
+     The format: a header (magic, format version, byte-order word, node
+     width, the build's options, counts, a 64-bit hash of the Bezier
+     segments traced), the node memory, the leaves' segment ids (and the u
+     ranges of segments spatial splits clipped, 8 bytes each, where there
+     are some) and a 64-bit checksum of all of it, in this host's byte
+     order. It is for
+     builds of this library with the same node width: another format
+     version, HAIROBB_NODE_WIDTH or byte order is HAIROBB_ERROR_UNSUPPORTED.
+     Other hair is HAIROBB_ERROR_MISMATCH: another segment count or basis,
+     or arrays that differ from the hash (for Bezier input any bit of the
+     vertex_count control points or of the indices; for other bases any bit
+     of the converted curves, so tangents too). verify_hair = HAIROBB_OFF
+     skips the hash (a pass over the arrays) for a renderer that knows its
+     hair is the one saved; the arrays are still validated as
+     hairobb_build validates them, and every segment id is checked against
+     segment_count, so a BVH loaded over other hair traces safely, only
+     wrongly. The loader trusts nothing else either: sizes and counts
+     (overflow-safe), header fields, the checksum, then a walk of the whole
+     tree: every reference of a node type the saved layout and policy
+     build and inside the node memory, every node reached once (no
+     cycles, sharing or overlap, no byte unreached), no deeper than the
+     traversal stack holds, inner nodes of 2 to W children (empty lanes
+     last), leaves of 1 to max_leaf_size segments taking the ids in tree
+     order, each id below segment_count. Anything wrong is
+     HAIROBB_ERROR_INVALID_FILE, with nothing allocated left behind. The
+     floats of nodes are not checked: a NaN or infinite box only makes
+     rays miss children or visit more of them (hits come from the
+     segments, and the walk bounds what a traversal reads); the bounds
+     hairobb_bounds reports must be finite.
 
    SIMD PATHS
      The traversal and intersector exist in plain C, SSE2, SSE4.1, AVX and
@@ -224,7 +273,8 @@
      HAIROBB_ASSERT(x)       internal checks, default assert().
      HAIROBB_STATIC          make every function static to the including file.
      HAIROBB_NO_SIMD         plain C everywhere (same answers as the SIMD paths).
-     HAIROBB_NO_STDIO        leave out hairobb_hair_load (no <stdio.h>).
+     HAIROBB_NO_STDIO        leave out hairobb_hair_load, hairobb_save_file and
+                             hairobb_load_file (no <stdio.h>).
      HAIROBB_NO_THREADS      build on the calling thread only. Otherwise, on
                              POSIX systems, the build uses pthreads: link
                              with -pthread (glibc 2.34 and later need nothing).
@@ -236,7 +286,8 @@
                              compiled in, else 4.
 
    ERRORS
-     hairobb_build returns a hairobb_result; hairobb_result_string names it.
+     hairobb_build, hairobb_load and the readers return a hairobb_result;
+     hairobb_result_string names it.
      The library never prints and never exits.
 */
 #ifndef HAIROBB_H
@@ -270,9 +321,12 @@ typedef enum hairobb_result {
     HAIROBB_ERROR_OUT_OF_MEMORY,      /* HAIROBB_MALLOC returned NULL */
     HAIROBB_ERROR_TOO_LARGE,          /* counts whose byte sizes overflow, > 2^32-1 segments */
     HAIROBB_ERROR_CANCELLED,          /* the progress callback asked to stop */
-    HAIROBB_ERROR_INVALID_FILE,       /* .hair data: bad magic, reserved flags, counts that disagree with the size */
-    HAIROBB_ERROR_IO,                 /* a file could not be opened or read */
-    HAIROBB_ERROR_UNSUPPORTED         /* options.simd: a path this build or this CPU lacks */
+    HAIROBB_ERROR_INVALID_FILE,       /* .hair data: bad magic, reserved flags, counts that disagree with the size;
+                                         a saved BVH: anything wrong (SAVE AND LOAD) */
+    HAIROBB_ERROR_IO,                 /* a file could not be opened, read or written */
+    HAIROBB_ERROR_UNSUPPORTED,        /* options.simd: a path this build or this CPU lacks; a saved BVH of
+                                         another format version, node width or byte order */
+    HAIROBB_ERROR_MISMATCH            /* hairobb_load: the BVH was saved over other hair (or another basis) */
 } hairobb_result;
 
 HAIROBB_DEF const char *hairobb_result_string(hairobb_result r);
@@ -365,6 +419,7 @@ typedef struct hairobb_build_options {
     hairobb_simd simd;               /* HAIROBB_SIMD_AUTO, or a path to force */
     hairobb_parallel_for_fn parallel_for; /* NULL: the library's threads (see `threads`) */
     void *parallel_for_user;
+    hairobb_switch verify_hair;      /* hairobb_load: AUTO/ON compare the hair with the saved hash, OFF skip it */
 } hairobb_build_options;
 
 typedef struct hairobb_bvh hairobb_bvh;
@@ -411,6 +466,36 @@ HAIROBB_DEF const char *hairobb_simd_string(hairobb_simd simd);
 
 /* Bounds of all ribbons, radius included. */
 HAIROBB_DEF void hairobb_bounds(const hairobb_bvh *bvh, float lower[3], float upper[3]);
+
+/* Saving and loading a built BVH (SAVE AND LOAD in the manual).
+   hairobb_save_size: the bytes hairobb_save writes (0 for NULL).
+   hairobb_save: writes them into buffer; HAIROBB_ERROR_INVALID_ARGUMENT
+   (nothing written) if size is smaller or a pointer NULL. */
+HAIROBB_DEF size_t hairobb_save_size(const hairobb_bvh *bvh);
+HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, size_t size);
+/* A BVH from the size bytes hairobb_save wrote (nothing of buffer is kept),
+   over the same hair it was built on: the caller's arrays as hairobb_build
+   takes them (the BVH keeps pointers to them, see MEMORY LIFETIME) and
+   options (may be NULL) for basis, tangents, simd, hit_filter,
+   allocator_user and verify_hair; every other option is the saved BVH's.
+   It traces as the saved BVH did, bit for bit. On failure *out is NULL and
+   nothing is leaked: HAIROBB_ERROR_INVALID_FILE (anything wrong in the
+   bytes), _UNSUPPORTED (saved by another format version, node width or
+   byte order), _MISMATCH (other hair, segment count or basis), the errors
+   of hairobb_build's validation of the arrays, _OUT_OF_MEMORY. */
+HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
+                                        const float *vertices, size_t vertex_count,
+                                        const uint32_t *indices, size_t segment_count,
+                                        const hairobb_build_options *options, hairobb_bvh **out);
+#ifndef HAIROBB_NO_STDIO
+/* The same through a file (HAIROBB_ERROR_IO if it cannot be opened, read or
+   written); each holds the whole file in memory once while it runs. */
+HAIROBB_DEF hairobb_result hairobb_save_file(const hairobb_bvh *bvh, const char *path);
+HAIROBB_DEF hairobb_result hairobb_load_file(const char *path,
+                                             const float *vertices, size_t vertex_count,
+                                             const uint32_t *indices, size_t segment_count,
+                                             const hairobb_build_options *options, hairobb_bvh **out);
+#endif
 
 typedef struct hairobb_ray {
     float org[3]; float tnear;
@@ -808,6 +893,10 @@ struct hairobb_bvh {
     uint64_t root;
     float lower[3], upper[3];
     hairobb_precision precision;
+    /* what hairobb_save records besides: the build's resolved options */
+    hairobb_node_policy policy;
+    hairobb_obb_layout obb_layout;
+    unsigned max_leaf_size;
     hairobb_simd simd;                /* the kernels' path */
     int pieces, piece_chunks;         /* linear pieces; 8-lane chunks of them */
     unsigned chunk_valid[2];          /* lanes holding real pieces */
@@ -829,9 +918,11 @@ HAIROBB_DEF const char *hairobb_result_string(hairobb_result r)
     case HAIROBB_ERROR_OUT_OF_MEMORY: return "out of memory";
     case HAIROBB_ERROR_TOO_LARGE: return "input too large (size overflow or more than 2^32-1 segments)";
     case HAIROBB_ERROR_CANCELLED: return "build cancelled by the progress callback";
-    case HAIROBB_ERROR_INVALID_FILE: return "invalid .hair data (magic, reserved flags, or counts that disagree with the size)";
-    case HAIROBB_ERROR_IO: return "file could not be opened or read";
-    case HAIROBB_ERROR_UNSUPPORTED: return "SIMD path (options.simd) not compiled in or not supported by this CPU";
+    case HAIROBB_ERROR_INVALID_FILE: return "invalid .hair data or saved BVH (magic, flags, counts, sizes, checksum or structure)";
+    case HAIROBB_ERROR_IO: return "file could not be opened, read or written";
+    case HAIROBB_ERROR_UNSUPPORTED: return "not supported: SIMD path (options.simd) this build or CPU lacks, or a BVH saved by "
+                                           "another format version, node width or byte order";
+    case HAIROBB_ERROR_MISMATCH: return "saved BVH loaded over other hair (vertices, indices, segment count or basis)";
     }
     return "unknown hairobb_result";
 }
@@ -939,6 +1030,34 @@ static void hairobb__to_bezier(hairobb_basis basis, const float *p, const float 
         }
     }
     for (c = 3; c < 16; c += 4) b[c] = hairobb__maxf(b[c], 0.0f);
+}
+
+/* Segments of another basis in Bezier form: 16 floats each, then the
+   indices 4 i, then a copy of the caller's indices (hairobb_refit converts
+   new points again; the caller's arrays need not outlive the build); NULL
+   when out of memory. hairobb_build and hairobb_load convert alike. */
+/* Bytes of the Bezier curves other bases are converted to: 16 floats,
+   their index and the caller's index per segment. */
+static size_t hairobb__curve_bytes(size_t segment_count)
+{
+    return (16 * sizeof(float) + 2 * sizeof(uint32_t)) * segment_count;
+}
+
+static float *hairobb__convert_curves(hairobb_basis basis, const float *vertices, const uint32_t *indices,
+                                      const float *tangents, size_t segment_count, void *user)
+{
+    float *curves = HAIROBB__CAST(float *, HAIROBB_MALLOC(hairobb__curve_bytes(segment_count), user));
+    uint32_t *curve_indices;
+    size_t i;
+    if (!curves) return NULL;
+    curve_indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, curves + 16 * segment_count));
+    for (i = 0; i < segment_count; ++i) {
+        size_t at = 4 * (size_t)indices[i];
+        hairobb__to_bezier(basis, vertices + at, tangents ? tangents + at : NULL, curves + 16 * i);
+        curve_indices[i] = (uint32_t)(4 * i);
+    }
+    memcpy(curve_indices + segment_count, indices, segment_count * sizeof(uint32_t));
+    return curves;
 }
 
 /* The bin (of HAIROBB__BINS) of coordinate x for binning from origin. */
@@ -2873,13 +2992,6 @@ static void hairobb__setup_pieces(hairobb_bvh *bvh, int pieces)
     }
 }
 
-/* Bytes of the Bezier curves other bases are converted to: 16 floats,
-   their index and the caller's index per segment. */
-static size_t hairobb__curve_bytes(size_t segment_count)
-{
-    return (16 * sizeof(float) + 2 * sizeof(uint32_t)) * segment_count;
-}
-
 /* Bytes of the leaves' segment ids, and of the clipped parts' ranges. */
 static size_t hairobb__leaf_bytes(const hairobb_bvh *bvh)
 {
@@ -2959,23 +3071,14 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     if (!bvh || !b.ids || (opt.spatial_splits == HAIROBB_ON && !b.ranges) || !b.world_boxes ||
         (b.frame_capacity && !b.frame_boxes))
         goto failed;
+    bvh->vertex_count = vertex_count;
     if (opt.basis != HAIROBB_BASIS_BEZIER) {
-        /* Bezier control points, 16 floats per segment, then their indices,
-           then the caller's (a refit converts new points again) */
-        float *curves = HAIROBB__CAST(float *, HAIROBB_MALLOC(hairobb__curve_bytes(segment_count), b.user));
-        uint32_t *curve_indices;
+        float *curves = hairobb__convert_curves(opt.basis, vertices, indices, opt.tangents, segment_count, b.user);
         if (!curves) goto failed;
-        curve_indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, curves + 16 * segment_count));
-        memcpy(curve_indices + segment_count, indices, segment_count * sizeof(uint32_t));
-        bvh->source_indices = curve_indices + segment_count;
         bvh->curves = curves;
-        for (i = 0; i < segment_count; ++i) {
-            size_t at = 4 * (size_t)indices[i];
-            hairobb__to_bezier(opt.basis, vertices + at, opt.tangents ? opt.tangents + at : NULL, curves + 16 * i);
-            curve_indices[i] = (uint32_t)(4 * i);
-        }
         b.vertices = vertices = curves;
-        b.indices = indices = curve_indices;
+        b.indices = indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, curves + 16 * segment_count));
+        bvh->source_indices = indices + segment_count;
     }
     b.error = HAIROBB_OK;
 
@@ -3033,6 +3136,9 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     bvh->hit_filter_user = opt.hit_filter_user;
     bvh->allocator_user = b.user;
     bvh->precision = opt.precision;
+    bvh->policy = opt.nodes;
+    bvh->obb_layout = opt.obb_layout;
+    bvh->max_leaf_size = opt.max_leaf_size;
     bvh->simd = simd;
     hairobb__setup_pieces(bvh, (int)opt.curve_pieces);
     bvh->stats = b.stats;
@@ -3414,6 +3520,459 @@ HAIROBB_DEF hairobb_result hairobb_refit(hairobb_bvh *bvh, const float *vertices
 {
     return hairobb_refit_tangents(bvh, vertices, NULL);
 }
+
+/* ------------------------------------------------------------------------ */
+/* Save and load                                                             */
+/* ------------------------------------------------------------------------ */
+/* The format (host byte order; the byte-order word tells another host's):
+     header, HAIROBB__SAVE_HEADER bytes at the offsets HAIROBB__AT_*;
+     the node memory, node_bytes bytes, as the traversal reads it;
+     leaf_prims, 4 bytes each, then zeros to a multiple of 8;
+     where flags has HAIROBB__SAVE_RANGES (a spatial-split tree that clipped
+     segments), leaf_ranges: u0, u1 of each leaf_prims entry, 8 bytes each;
+     a checksum of every byte before it (hairobb__hash), 8 bytes.
+   The hair hash is hairobb__hair_hash of the Bezier segments the BVH
+   traces: the caller's arrays, or for other bases the converted curves,
+   which are not stored (a load converts the caller's arrays again, with
+   the build's code, so the hash also covers tangents). */
+#define HAIROBB__SAVE_VERSION 1u
+#define HAIROBB__SAVE_BYTE_ORDER 0x01020304u
+#define HAIROBB__SAVE_HEADER 128
+#define HAIROBB__SAVE_RANGES 1u         /* leaf_ranges follow leaf_prims */
+#define HAIROBB__AT_VERSION 8           /* uint32 each ... */
+#define HAIROBB__AT_BYTE_ORDER 12
+#define HAIROBB__AT_WIDTH 16
+#define HAIROBB__AT_BASIS 20
+#define HAIROBB__AT_PRECISION 24
+#define HAIROBB__AT_PIECES 28
+#define HAIROBB__AT_LAYOUT 32
+#define HAIROBB__AT_MAX_LEAF 36
+#define HAIROBB__AT_POLICY 40
+#define HAIROBB__AT_FLAGS 44            /* HAIROBB__SAVE_RANGES or 0 */
+#define HAIROBB__AT_SEGMENTS 48         /* ... uint64 each ... */
+#define HAIROBB__AT_VERTICES 56
+#define HAIROBB__AT_HAIR_HASH 64
+#define HAIROBB__AT_ROOT 72
+#define HAIROBB__AT_NODE_BYTES 80
+#define HAIROBB__AT_LEAF_PRIMS 88
+#define HAIROBB__AT_BOUNDS 96           /* ... float lower[3], upper[3]; 120..127 zero */
+static const unsigned char hairobb__save_magic[8] = {'H', 'A', 'I', 'R', 'O', 'B', 'B', 0x1a};
+
+/* A 64-bit hash of 8-byte words: each step (xor the word, multiply by an
+   odd constant, xor-shift) is a bijection of the state, and of the word
+   for a given state, so changing any one word always changes the result
+   (every single-byte flip is caught). Four lanes take 32-byte blocks (one
+   chain's multiply latency would hold it below memory speed), then are
+   folded into one, which takes the rest, one zero-padded word, and the
+   length. */
+HAIROBB__INLINE uint64_t hairobb__hash_word(uint64_t h, uint64_t word)
+{
+    h = (h ^ word) * UINT64_C(0x9e3779b97f4a7c15);
+    return h ^ (h >> 31);
+}
+
+static uint64_t hairobb__hash(uint64_t h, const void *data, size_t bytes)
+{
+    const unsigned char *p = HAIROBB__CAST(const unsigned char *, data);
+    uint64_t lane[4], word[4];
+    size_t i = 0;
+    int k;
+    for (k = 0; k < 4; ++k) lane[k] = h + (uint64_t)k;
+    for (; i + 32 <= bytes; i += 32) {
+        memcpy(word, p + i, 32);
+        for (k = 0; k < 4; ++k) lane[k] = hairobb__hash_word(lane[k], word[k]);
+    }
+    h = hairobb__hash_word(hairobb__hash_word(hairobb__hash_word(lane[0], lane[1]), lane[2]), lane[3]);
+    for (; i + 8 <= bytes; i += 8) {
+        memcpy(word, p + i, 8);
+        h = hairobb__hash_word(h, word[0]);
+    }
+    if (i < bytes) {
+        word[0] = 0;
+        memcpy(word, p + i, bytes - i);
+        h = hairobb__hash_word(h, word[0]);
+    }
+    return hairobb__hash_word(h, (uint64_t)bytes);
+}
+
+/* The checksum a saved BVH of size bytes ends with. */
+static uint64_t hairobb__save_checksum(const unsigned char *saved, size_t size)
+{
+    return hairobb__hash(UINT64_C(0x68616972), saved, size - 8);
+}
+
+/* Control points of the Bezier segments a BVH traces: the caller's, or
+   the converted curves' 4 a segment (the hash covers what is traced). */
+static size_t hairobb__traced_vertex_count(const hairobb_bvh *bvh)
+{
+    return bvh->curves ? 4 * bvh->segment_count : bvh->vertex_count;
+}
+
+static uint64_t hairobb__hair_hash(const float *vertices, size_t vertex_count, const uint32_t *indices, size_t segment_count)
+{
+    uint64_t h = hairobb__hash_word(hairobb__hash_word(UINT64_C(0x6f6262), (uint64_t)vertex_count), (uint64_t)segment_count);
+    h = hairobb__hash(h, vertices, 4 * sizeof(float) * vertex_count);
+    return hairobb__hash(h, indices, sizeof(uint32_t) * segment_count);
+}
+
+static void hairobb__put32(unsigned char *at, uint32_t v) { memcpy(at, &v, sizeof v); }
+static void hairobb__put64(unsigned char *at, uint64_t v) { memcpy(at, &v, sizeof v); }
+static uint32_t hairobb__get32(const unsigned char *at) { uint32_t v; memcpy(&v, at, sizeof v); return v; }
+static uint64_t hairobb__get64(const unsigned char *at) { uint64_t v; memcpy(&v, at, sizeof v); return v; }
+
+/* leaf_prims' bytes in the format: a multiple of 8 */
+static size_t hairobb__saved_leaf_bytes(size_t leaf_prim_count) { return (sizeof(uint32_t) * leaf_prim_count + 7) & ~(size_t)7; }
+
+HAIROBB_DEF size_t hairobb_save_size(const hairobb_bvh *bvh)
+{
+    if (!bvh) return 0;
+    return HAIROBB__SAVE_HEADER + bvh->node_bytes + hairobb__saved_leaf_bytes(bvh->leaf_prim_count) +
+           (bvh->leaf_ranges ? 2 * sizeof(float) * bvh->leaf_prim_count : 0) + 8;
+}
+
+HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, size_t size)
+{
+    unsigned char *out = HAIROBB__CAST(unsigned char *, buffer);
+    size_t total = hairobb_save_size(bvh), leaf_bytes;
+    int k;
+    if (!bvh || !out || size < total) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    memset(out, 0, HAIROBB__SAVE_HEADER);
+    memcpy(out, hairobb__save_magic, sizeof hairobb__save_magic);
+    hairobb__put32(out + HAIROBB__AT_VERSION, HAIROBB__SAVE_VERSION);
+    hairobb__put32(out + HAIROBB__AT_BYTE_ORDER, HAIROBB__SAVE_BYTE_ORDER);
+    hairobb__put32(out + HAIROBB__AT_WIDTH, HAIROBB__W);
+    hairobb__put32(out + HAIROBB__AT_BASIS, (uint32_t)bvh->basis);
+    hairobb__put32(out + HAIROBB__AT_PRECISION, (uint32_t)bvh->precision);
+    hairobb__put32(out + HAIROBB__AT_PIECES, (uint32_t)bvh->pieces);
+    hairobb__put32(out + HAIROBB__AT_LAYOUT, (uint32_t)bvh->obb_layout);
+    hairobb__put32(out + HAIROBB__AT_MAX_LEAF, bvh->max_leaf_size);
+    hairobb__put32(out + HAIROBB__AT_POLICY, (uint32_t)bvh->policy);
+    hairobb__put32(out + HAIROBB__AT_FLAGS, bvh->leaf_ranges ? HAIROBB__SAVE_RANGES : 0u);
+    hairobb__put64(out + HAIROBB__AT_SEGMENTS, bvh->segment_count);
+    hairobb__put64(out + HAIROBB__AT_VERTICES, hairobb__traced_vertex_count(bvh));
+    hairobb__put64(out + HAIROBB__AT_HAIR_HASH, hairobb__hair_hash(bvh->vertices, hairobb__traced_vertex_count(bvh), bvh->indices, bvh->segment_count));
+    hairobb__put64(out + HAIROBB__AT_ROOT, bvh->root);
+    hairobb__put64(out + HAIROBB__AT_NODE_BYTES, bvh->node_bytes);
+    hairobb__put64(out + HAIROBB__AT_LEAF_PRIMS, bvh->leaf_prim_count);
+    for (k = 0; k < 3; ++k) {
+        memcpy(out + HAIROBB__AT_BOUNDS + 4 * k, &bvh->lower[k], sizeof(float));
+        memcpy(out + HAIROBB__AT_BOUNDS + 12 + 4 * k, &bvh->upper[k], sizeof(float));
+    }
+    out += HAIROBB__SAVE_HEADER;
+    if (bvh->node_bytes) memcpy(out, bvh->nodes, bvh->node_bytes);
+    out += bvh->node_bytes;
+    leaf_bytes = hairobb__saved_leaf_bytes(bvh->leaf_prim_count);
+    memset(out + leaf_bytes - 8, 0, 8);   /* the padding; leaf_bytes >= 8: a tree has a leaf */
+    memcpy(out, bvh->leaf_prims, sizeof(uint32_t) * bvh->leaf_prim_count);
+    out += leaf_bytes;
+    if (bvh->leaf_ranges) {
+        memcpy(out, bvh->leaf_ranges, 2 * sizeof(float) * bvh->leaf_prim_count);
+        out += 2 * sizeof(float) * bvh->leaf_prim_count;
+    }
+    hairobb__put64(out, hairobb__save_checksum(HAIROBB__CAST(unsigned char *, buffer), total));
+    return HAIROBB_OK;
+}
+
+/* The walk that proves a loaded tree traceable: every reference is of a
+   type the layout and policy make, inside the node memory; every node is
+   reached once (a bit per 16 bytes: no cycles, no sharing, no overlap) at
+   a depth whose pushes the traversal stack holds; leaves take leaf_prims
+   in tree order, exactly once, as hairobb__finish_tree wrote them. It
+   counts the statistics as the builder did. */
+typedef struct hairobb__tree_check {
+    const unsigned char *nodes;
+    size_t node_bytes, reached_bytes;
+    unsigned char *reached;          /* a bit per 16 bytes of node memory */
+    size_t leaf_prim_count, next_leaf;
+    unsigned inner_types;            /* bit per node type the file's layout and policy build */
+    unsigned max_leaf;
+    hairobb_stats stats;
+} hairobb__tree_check;
+
+static int hairobb__check_tree(hairobb__tree_check *c, uint64_t ref, unsigned depth)
+{
+    unsigned type = HAIROBB__REF_TYPE(ref);
+    size_t offset = (size_t)(ref & ~(uint64_t)15), size, stride, granule, children = 0;
+    int i, empty_seen = 0;
+    if (type == HAIROBB__REF_LEAF) {
+        uint64_t first = ref >> 8, count = (ref >> 4) & 15u;
+        if (count == 0 || count > c->max_leaf || first != c->next_leaf || count > c->leaf_prim_count - c->next_leaf) return 0;
+        c->next_leaf += (size_t)count;
+        c->stats.leaves++;
+        c->stats.leaf_references += (size_t)count;
+        if (depth > c->stats.max_depth) c->stats.max_depth = depth;
+        return 1;
+    }
+    /* the traversal reaches an inner node at depth d with at most W - 1
+       entries per ancestor on its stack, and pushes its W children before
+       taking the nearest: (W - 1) d + W entries */
+    if (!(c->inner_types >> type & 1u) || (ref >> 4) > (uint64_t)((size_t)-1 >> 4) ||
+        (size_t)(HAIROBB__W - 1) * depth + HAIROBB__W > HAIROBB__STACK)
+        return 0;
+    size = hairobb__node_size(type);
+    stride = hairobb__node_stride(type);   /* with what follows the node (an affine OBB node's directions) */
+    if (offset > c->node_bytes || stride > c->node_bytes - offset) return 0;
+    for (granule = offset / 16; granule < (offset + stride) / 16; ++granule) {
+        if (c->reached[granule / 8] >> (granule % 8) & 1u) return 0;
+        c->reached[granule / 8] |= (unsigned char)(1u << (granule % 8));
+    }
+    c->reached_bytes += stride;
+    if (type == HAIROBB__REF_AABB || type == HAIROBB__REF_QAABB) c->stats.aabb_nodes++; else c->stats.obb_nodes++;
+    /* 2..W children, the empty lanes last (as hairobb__build_node fills them) */
+    for (i = 0; i < HAIROBB__W; ++i) {
+        uint64_t child;
+        memcpy(&child, c->nodes + offset + size - HAIROBB__W * sizeof(uint64_t) + i * sizeof child, sizeof child);
+        if (child == HAIROBB__REF_EMPTY) { empty_seen = 1; continue; }
+        if (empty_seen || !hairobb__check_tree(c, child, depth + 1)) return 0;
+        ++children;
+    }
+    return children >= 2;
+}
+
+/* The node types a layout and policy build (hairobb__build_node). */
+static unsigned hairobb__layout_types(hairobb_obb_layout layout, hairobb_node_policy policy)
+{
+    unsigned types = 0, aabb = 1u << HAIROBB__REF_AABB | 1u << HAIROBB__REF_QAABB;
+    if (layout == HAIROBB_OBB_PER_CHILD) types = 1u << HAIROBB__REF_AABB | 1u << HAIROBB__REF_OBB;
+    if (layout == HAIROBB_OBB_SHARED_ROTATION) types = 1u << HAIROBB__REF_AABB | 1u << HAIROBB__REF_ROTATED;
+    if (layout == HAIROBB_OBB_COMPRESSED) types = 1u << HAIROBB__REF_QAABB | 1u << HAIROBB__REF_QOBB;
+    if (layout == HAIROBB_OBB_COMPRESSED_PER_CHILD)
+        types = 1u << HAIROBB__REF_AABB | 1u << HAIROBB__REF_OBB | 1u << HAIROBB__REF_QOBB_PER_CHILD;
+    if (policy == HAIROBB_NODES_AABB_ONLY) types &= aabb;
+    if (policy == HAIROBB_NODES_OBB_ONLY) types &= ~aabb;
+    return types;
+}
+
+HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
+                                        const float *vertices, size_t vertex_count,
+                                        const uint32_t *indices, size_t segment_count,
+                                        const hairobb_build_options *options, hairobb_bvh **out)
+{
+    const unsigned char *in = HAIROBB__CAST(const unsigned char *, buffer);
+    hairobb_build_options opt;
+    hairobb__tree_check check;
+    hairobb_result result;
+    hairobb_simd simd;
+    hairobb_bvh *bvh;
+    uint64_t node_bytes, leaf_prim_count, saved_segments;
+    uint32_t basis, precision, pieces, layout, max_leaf, policy, flags;
+    size_t leaf_bytes, range_bytes, i;
+    void *user;
+    int k;
+
+    if (out) *out = NULL;
+    if (!out || !in || !vertices || !indices || segment_count == 0) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    if (options) opt = *options; else memset(&opt, 0, sizeof opt);
+    if ((unsigned)opt.basis > HAIROBB_BASIS_LINEAR || (opt.basis == HAIROBB_BASIS_HERMITE) != (opt.tangents != NULL) ||
+        (unsigned)opt.simd > HAIROBB_SIMD_AVX2 || (unsigned)opt.verify_hair > HAIROBB_OFF || opt.threads > 256)
+        return HAIROBB_ERROR_INVALID_ARGUMENT;
+    result = hairobb__choose_simd(opt.simd, &simd);
+    if (result != HAIROBB_OK) return result;
+    user = opt.allocator_user;
+
+    /* the header: what this build can read, then sizes that add up to size, then the checksum */
+    if (size < HAIROBB__SAVE_HEADER + 8 || memcmp(in, hairobb__save_magic, sizeof hairobb__save_magic) != 0)
+        return HAIROBB_ERROR_INVALID_FILE;
+    if (hairobb__get32(in + HAIROBB__AT_VERSION) != HAIROBB__SAVE_VERSION ||
+        hairobb__get32(in + HAIROBB__AT_BYTE_ORDER) != HAIROBB__SAVE_BYTE_ORDER || hairobb__get32(in + HAIROBB__AT_WIDTH) != HAIROBB__W)
+        return HAIROBB_ERROR_UNSUPPORTED;
+    node_bytes = hairobb__get64(in + HAIROBB__AT_NODE_BYTES);
+    leaf_prim_count = hairobb__get64(in + HAIROBB__AT_LEAF_PRIMS);
+    if (node_bytes > size - HAIROBB__SAVE_HEADER - 8 || leaf_prim_count > (size - HAIROBB__SAVE_HEADER - 8) / sizeof(uint32_t))
+        return HAIROBB_ERROR_INVALID_FILE;
+    leaf_bytes = hairobb__saved_leaf_bytes((size_t)leaf_prim_count);
+    flags = hairobb__get32(in + HAIROBB__AT_FLAGS);
+    range_bytes = flags == HAIROBB__SAVE_RANGES ? 2 * sizeof(float) * (size_t)leaf_prim_count : 0;   /* no overflow: below size */
+    if (flags > HAIROBB__SAVE_RANGES || leaf_bytes + range_bytes != size - HAIROBB__SAVE_HEADER - 8 - (size_t)node_bytes ||
+        hairobb__get64(in + size - 8) != hairobb__save_checksum(in, size))
+        return HAIROBB_ERROR_INVALID_FILE;
+    basis = hairobb__get32(in + HAIROBB__AT_BASIS);
+    precision = hairobb__get32(in + HAIROBB__AT_PRECISION);
+    pieces = hairobb__get32(in + HAIROBB__AT_PIECES);
+    layout = hairobb__get32(in + HAIROBB__AT_LAYOUT);
+    max_leaf = hairobb__get32(in + HAIROBB__AT_MAX_LEAF);
+    policy = hairobb__get32(in + HAIROBB__AT_POLICY);
+    saved_segments = hairobb__get64(in + HAIROBB__AT_SEGMENTS);
+    if (basis > HAIROBB_BASIS_LINEAR || precision > HAIROBB_PRECISION_PIECES || pieces < 1 || pieces > HAIROBB__MAX_PIECES ||
+        layout < HAIROBB_OBB_PER_CHILD || layout > HAIROBB_OBB_COMPRESSED_PER_CHILD || max_leaf < 1 || max_leaf > HAIROBB__MAX_LEAF ||
+        policy > HAIROBB_NODES_OBB_ONLY || hairobb__get64(in + 120) != 0 ||
+        saved_segments == 0 || leaf_prim_count == 0 || node_bytes % 16 != 0)
+        return HAIROBB_ERROR_INVALID_FILE;
+    for (i = HAIROBB__SAVE_HEADER + (size_t)node_bytes + sizeof(uint32_t) * (size_t)leaf_prim_count;
+         i < HAIROBB__SAVE_HEADER + (size_t)node_bytes + leaf_bytes; ++i)
+        if (in[i] != 0) return HAIROBB_ERROR_INVALID_FILE;
+    for (k = 0; k < 3; ++k) {
+        float lo, hi;
+        memcpy(&lo, in + HAIROBB__AT_BOUNDS + 4 * k, sizeof lo);
+        memcpy(&hi, in + HAIROBB__AT_BOUNDS + 12 + 4 * k, sizeof hi);
+        if (!(lo <= hi) || !(fabsf(lo) <= FLT_MAX) || !(fabsf(hi) <= FLT_MAX)) return HAIROBB_ERROR_INVALID_FILE;
+    }
+    if (basis != (uint32_t)opt.basis || saved_segments != (uint64_t)segment_count) return HAIROBB_ERROR_MISMATCH;
+    result = hairobb__validate(vertices, vertex_count, indices, segment_count, hairobb__basis_points(opt.basis), opt.tangents);
+    if (result != HAIROBB_OK) return result;
+
+    bvh = HAIROBB__CAST(hairobb_bvh *, HAIROBB_MALLOC(sizeof *bvh, user));
+    if (!bvh) return HAIROBB_ERROR_OUT_OF_MEMORY;
+    memset(bvh, 0, sizeof *bvh);
+    bvh->allocator_user = user;
+    bvh->vertices = vertices;
+    bvh->indices = indices;
+    bvh->vertex_count = vertex_count;
+    memset(&check, 0, sizeof check);
+    result = HAIROBB_ERROR_OUT_OF_MEMORY;
+    if (opt.basis != HAIROBB_BASIS_BEZIER) {
+        float *curves = hairobb__convert_curves(opt.basis, vertices, indices, opt.tangents, segment_count, user);
+        if (!curves) goto failed;
+        bvh->curves = curves;
+        bvh->vertices = curves;
+        bvh->indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, curves + 16 * segment_count));
+        bvh->source_indices = bvh->indices + segment_count;
+    }
+    bvh->segment_count = segment_count;
+    if (opt.verify_hair != HAIROBB_OFF &&
+        (hairobb__get64(in + HAIROBB__AT_VERTICES) != (uint64_t)hairobb__traced_vertex_count(bvh) ||
+         hairobb__get64(in + HAIROBB__AT_HAIR_HASH) != hairobb__hair_hash(bvh->vertices, hairobb__traced_vertex_count(bvh), bvh->indices, segment_count))) {
+        result = HAIROBB_ERROR_MISMATCH;
+        goto failed;
+    }
+    if (node_bytes) {
+        unsigned char *allocation = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC((size_t)node_bytes + 64, user));
+        if (!allocation) goto failed;
+        bvh->node_allocation = allocation;
+        bvh->nodes = hairobb__align64(allocation);
+        bvh->node_bytes = (size_t)node_bytes;
+        memcpy(bvh->nodes, in + HAIROBB__SAVE_HEADER, bvh->node_bytes);
+        check.reached = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(bvh->node_bytes / 128 + 1, user));
+        if (!check.reached) goto failed;
+        memset(check.reached, 0, bvh->node_bytes / 128 + 1);
+    }
+    bvh->leaf_prims = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(sizeof(uint32_t) * (size_t)leaf_prim_count, user));
+    if (!bvh->leaf_prims) goto failed;
+    bvh->leaf_prim_count = (size_t)leaf_prim_count;
+    memcpy(bvh->leaf_prims, in + HAIROBB__SAVE_HEADER + bvh->node_bytes, sizeof(uint32_t) * bvh->leaf_prim_count);
+    bvh->root = hairobb__get64(in + HAIROBB__AT_ROOT);
+
+    if (range_bytes) {
+        /* u ranges inside [0, 1] (hairobb_refit clips the segments to them) */
+        bvh->leaf_ranges = HAIROBB__CAST(float *, HAIROBB_MALLOC(range_bytes, user));
+        if (!bvh->leaf_ranges) goto failed;
+        memcpy(bvh->leaf_ranges, in + HAIROBB__SAVE_HEADER + bvh->node_bytes + leaf_bytes, range_bytes);
+    }
+    result = HAIROBB_ERROR_INVALID_FILE;
+    for (i = 0; i < bvh->leaf_prim_count; ++i) {
+        if (bvh->leaf_prims[i] >= segment_count) goto failed;
+        if (bvh->leaf_ranges && !(bvh->leaf_ranges[2 * i] >= 0.0f && bvh->leaf_ranges[2 * i] <= bvh->leaf_ranges[2 * i + 1] &&
+                                  bvh->leaf_ranges[2 * i + 1] <= 1.0f))
+            goto failed;
+    }
+    check.nodes = bvh->nodes;
+    check.node_bytes = bvh->node_bytes;
+    check.leaf_prim_count = bvh->leaf_prim_count;
+    check.inner_types = hairobb__layout_types((hairobb_obb_layout)layout, (hairobb_node_policy)policy);
+    check.max_leaf = max_leaf;
+    if (!hairobb__check_tree(&check, bvh->root, 0) || check.next_leaf != check.leaf_prim_count ||
+        check.reached_bytes != check.node_bytes)
+        goto failed;
+    if (check.reached) HAIROBB_FREE(check.reached, user);
+
+    for (k = 0; k < 3; ++k) {
+        memcpy(&bvh->lower[k], in + HAIROBB__AT_BOUNDS + 4 * k, sizeof(float));
+        memcpy(&bvh->upper[k], in + HAIROBB__AT_BOUNDS + 12 + 4 * k, sizeof(float));
+    }
+    bvh->segment_count = segment_count;
+    bvh->hit_filter = opt.hit_filter;
+    bvh->hit_filter_user = opt.hit_filter_user;
+    bvh->precision = (hairobb_precision)precision;
+    bvh->basis = opt.basis;
+    bvh->policy = (hairobb_node_policy)policy;
+    bvh->obb_layout = (hairobb_obb_layout)layout;
+    bvh->max_leaf_size = max_leaf;
+    bvh->simd = simd;
+    /* hairobb_refit of a loaded BVH runs on the load's threads */
+    bvh->threads = opt.threads;
+    bvh->parallel_for = opt.parallel_for;
+    bvh->parallel_for_user = opt.parallel_for_user;
+    hairobb__setup_pieces(bvh, (int)pieces);
+    bvh->stats = check.stats;
+    bvh->stats.node_bytes = bvh->node_bytes;
+    bvh->stats.leaf_bytes = hairobb__leaf_bytes(bvh);
+    *out = bvh;
+    return HAIROBB_OK;
+
+failed:
+    if (check.reached) HAIROBB_FREE(check.reached, user);
+    hairobb_free(bvh);
+    return result;
+}
+
+#ifndef HAIROBB_NO_STDIO
+HAIROBB_DEF hairobb_result hairobb_save_file(const hairobb_bvh *bvh, const char *path)
+{
+    size_t size = hairobb_save_size(bvh);
+    unsigned char *data;
+    hairobb_result result;
+    FILE *file;
+    if (!bvh || !path) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    data = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(size, bvh->allocator_user));
+    if (!data) return HAIROBB_ERROR_OUT_OF_MEMORY;
+    result = hairobb_save(bvh, data, size);
+    if (result == HAIROBB_OK) {
+        file = fopen(path, "wb");
+        if (!file) {
+            result = HAIROBB_ERROR_IO;
+        } else {
+            if (fwrite(data, 1, size, file) != size) result = HAIROBB_ERROR_IO;
+            if (fclose(file) != 0) result = HAIROBB_ERROR_IO;
+        }
+    }
+    HAIROBB_FREE(data, bvh->allocator_user);
+    return result;
+}
+
+HAIROBB_DEF hairobb_result hairobb_load_file(const char *path,
+                                             const float *vertices, size_t vertex_count,
+                                             const uint32_t *indices, size_t segment_count,
+                                             const hairobb_build_options *options, hairobb_bvh **out)
+{
+    void *user = options ? options->allocator_user : NULL;
+    unsigned char header[HAIROBB__SAVE_HEADER], *data;
+    hairobb_result result = HAIROBB_OK;
+    FILE *file;
+    long length = 0;
+    if (out) *out = NULL;
+    if (!path || !out) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    file = fopen(path, "rb");
+    if (!file) return HAIROBB_ERROR_IO;
+    if (fread(header, 1, sizeof header, file) != sizeof header)
+        result = ferror(file) ? HAIROBB_ERROR_IO : HAIROBB_ERROR_INVALID_FILE;   /* a directory, or too short */
+    else if (fseek(file, 0, SEEK_END) != 0 || (length = ftell(file)) < 0 || fseek(file, 0, SEEK_SET) != 0)
+        result = HAIROBB_ERROR_IO;
+    else if (memcmp(header, hairobb__save_magic, sizeof hairobb__save_magic) == 0 &&
+             hairobb__get32(header + HAIROBB__AT_VERSION) == HAIROBB__SAVE_VERSION &&
+             hairobb__get32(header + HAIROBB__AT_BYTE_ORDER) == HAIROBB__SAVE_BYTE_ORDER &&
+             hairobb__get32(header + HAIROBB__AT_WIDTH) == HAIROBB__W &&
+             (hairobb__get64(header + HAIROBB__AT_NODE_BYTES) > (uint64_t)length ||
+              hairobb__get64(header + HAIROBB__AT_LEAF_PRIMS) > (uint64_t)length / sizeof(uint32_t) ||
+              HAIROBB__SAVE_HEADER + hairobb__get64(header + HAIROBB__AT_NODE_BYTES) +
+                      ((sizeof(uint32_t) * hairobb__get64(header + HAIROBB__AT_LEAF_PRIMS) + 7) & ~(uint64_t)7) + 8 !=
+                  (uint64_t)length))
+        result = HAIROBB_ERROR_INVALID_FILE;   /* sizes that disagree with the file's: before any large allocation */
+    else if ((unsigned long)length > (size_t)-1)
+        result = HAIROBB_ERROR_TOO_LARGE;
+    if (result == HAIROBB_OK) {
+        data = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC((size_t)length, user));
+        if (!data)
+            result = HAIROBB_ERROR_OUT_OF_MEMORY;
+        else if (fread(data, 1, (size_t)length, file) != (size_t)length)
+            result = HAIROBB_ERROR_IO;
+        else
+            result = hairobb_load(data, (size_t)length, vertices, vertex_count, indices, segment_count, options, out);
+        if (data) HAIROBB_FREE(data, user);
+    }
+    fclose(file);
+    return result;
+}
+#endif
 
 /* ------------------------------------------------------------------------ */
 /* Rays: what every traversal path reads                                   */

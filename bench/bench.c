@@ -74,7 +74,8 @@ enum {
     DEFAULT_RESOLUTION = 768, /* make bench within 2 minutes on 2 cores */
     MAX_ROUNDS = 64,
     DEFAULT_ROUNDS = 3,
-    DEFAULT_ACCURACY_RAYS = 16384
+    DEFAULT_ACCURACY_RAYS = 16384,
+    MAX_SAVE_LOAD = 8
 };
 
 #define DEFAULT_TSV_PATH "build/bench.tsv"
@@ -100,6 +101,8 @@ typedef struct options {
     int quiet;
     int profile;
     int animate_frames;             /* --animate N: the animation alone */
+    size_t save_load_segments[MAX_SAVE_LOAD];   /* --save-load: combed scenes of these sizes */
+    int save_load_count;
 } options;
 
 static int show_progress; /* stderr is a terminal and --quiet was not given */
@@ -1496,6 +1499,9 @@ static void print_help(void)
            "  --profile           no timing: one pass of each variant over each ray set on 1 thread,\n"
            "                      a callgrind dump each (valgrind --collect-atstart=no), and a line\n"
            "                      'profile' with the work per ray (bench/profile.sh: make profile)\n"
+           "  --save-load LIST    only this: combed scenes of these segment counts (e.g. 1M,10M), each\n"
+           "                      built (all cores), saved and loaded in memory --rounds times: bytes per\n"
+           "                      segment, build, save and load seconds (with the hair check, and without)\n"
            "  --help              this text\n",
            DEFAULT_SEGMENTS, DEFAULT_RESOLUTION, DEFAULT_ROUNDS, DEFAULT_ACCURACY_RAYS, DEFAULT_TSV_PATH,
            DEFAULT_PNG_PATH, DEFAULT_PLOT_SCRIPT, TEST_DATA_STRAIGHT_HAIR_DEFAULT, SCENE_FURBALL_DEFAULT_PATH);
@@ -1651,8 +1657,17 @@ static int parse_options(int argc, char **argv, options *o)
         else if (strcmp(name, "--animate") == 0) {
             bad = parse_count(value, &count) || count < 1 || count > 100000;
             o->animate_frames = (int)count;
-        }
-        else {
+        } else if (strcmp(name, "--save-load") == 0) {
+            char list[256], *item, *rest = NULL;
+            snprintf(list, sizeof list, "%s", value);
+            o->save_load_count = 0;
+            for (item = strtok_r(list, ",", &rest); item && !bad; item = strtok_r(NULL, ",", &rest)) {
+                bad = o->save_load_count == MAX_SAVE_LOAD || parse_count(item, &count) || count == 0;
+                if (!bad)
+                    o->save_load_segments[o->save_load_count++] = count;
+            }
+            bad = bad || o->save_load_count == 0;
+        } else {
             fprintf(stderr, "bench: unknown option %s (see --help)\n", name);
             return 1;
         }
@@ -1785,6 +1800,93 @@ static int run_animation(const options *o, int frames)
 }
 
 /* ======================================================================== */
+/* Save and load against build                                              */
+/* ======================================================================== */
+
+/* --save-load: what a renderer saves by loading a saved BVH instead of
+   building it. Per round: a build (default options, all cores), a save into
+   memory, a load with the hair check and one without (both from memory,
+   nothing of disks in the figures); the loaded BVH must trace as the built
+   one (a 64 x 64 camera, compared to the bit). Medians and [min-max]. */
+static int save_load_bench(const options *o)
+{
+    int failures = 0;
+    printf("\nsave and load against build: combed, default options, all cores, %d rounds\n", o->rounds);
+    printf("%12s %10s %20s %20s %20s %20s %10s\n", "segments", "bytes/seg", "build s", "save s", "load s", "load unchecked s",
+           "build/load");
+    for (int c = 0; c < o->save_load_count; c++) {
+        hair_scene s;
+        double build_s[MAX_ROUNDS], save_s[MAX_ROUNDS], load_s[MAX_ROUNDS], unchecked_s[MAX_ROUNDS];
+        size_t size = 0;
+        int ok = 1;
+        progress_start("save/load: combed %zu segments", o->save_load_segments[c]);
+        if (scene_combed(&s, o->save_load_segments[c], 1) != 0) {
+            progress("out of memory");
+            ++failures;
+            continue;
+        }
+        for (int r = 0; r < o->rounds && ok; r++) {
+            hairobb_bvh *built = NULL, *loaded = NULL, *unchecked = NULL;
+            hairobb_build_options skip;
+            unsigned char *blob = NULL;
+            double t0 = scene_now();
+            ok = hairobb_build(s.vertices, s.vertex_count, s.indices, s.segment_count, NULL, &built) == HAIROBB_OK;
+            double t1 = scene_now();
+            size = hairobb_save_size(built);
+            ok = ok && (blob = (unsigned char *)malloc(size)) != NULL;
+            double t2 = scene_now();
+            ok = ok && hairobb_save(built, blob, size) == HAIROBB_OK;
+            double t3 = scene_now();
+            ok = ok && hairobb_load(blob, size, s.vertices, s.vertex_count, s.indices, s.segment_count, NULL, &loaded) == HAIROBB_OK;
+            double t4 = scene_now();
+            memset(&skip, 0, sizeof skip);
+            skip.verify_hair = HAIROBB_OFF;
+            ok = ok && hairobb_load(blob, size, s.vertices, s.vertex_count, s.indices, s.segment_count, &skip, &unchecked) == HAIROBB_OK;
+            double t5 = scene_now();
+            build_s[r] = t1 - t0;
+            save_s[r] = t3 - t2;
+            load_s[r] = t4 - t3;
+            unchecked_s[r] = t5 - t4;
+            if (ok && r == 0) {
+                enum { SIDE = 64 };
+                static float org[3 * SIDE * SIDE], dir[3 * SIDE * SIDE];
+                scene_camera_rays(&s, SIDE, SIDE, org, dir);
+                for (int i = 0; i < SIDE * SIDE && ok; i++) {
+                    hairobb_ray ray = {{org[3 * i], org[3 * i + 1], org[3 * i + 2]}, 0.0f,
+                                       {dir[3 * i], dir[3 * i + 1], dir[3 * i + 2]}, INFINITY};
+                    hairobb_hit a, b;
+                    memset(&a, 0, sizeof a);
+                    memset(&b, 0, sizeof b);
+                    int ga = hairobb_intersect1(built, &ray, &a), gb = hairobb_intersect1(loaded, &ray, &b);
+                    ok = ga == gb && memcmp(&a, &b, sizeof a) == 0;
+                }
+            }
+            hairobb_free(unchecked);
+            hairobb_free(loaded);
+            free(blob);
+            hairobb_free(built);
+        }
+        if (!ok) {
+            progress("failed");
+            printf("%12zu: build, save or load failed, or the loaded BVH traced otherwise\n", s.segment_count);
+            ++failures;
+        } else {
+            spread b = spread_of(build_s, o->rounds), sv = spread_of(save_s, o->rounds), l = spread_of(load_s, o->rounds);
+            spread u = spread_of(unchecked_s, o->rounds);
+            char cell[4][32];
+            const spread *cells[4] = {&b, &sv, &l, &u};
+            for (int k = 0; k < 4; k++)
+                snprintf(cell[k], sizeof cell[k], "%.4f [%.4f-%.4f]", cells[k]->median, cells[k]->min, cells[k]->max);
+            progress("done");
+            printf("%12zu %10.2f %20s %20s %20s %20s %9.1fx\n", s.segment_count, (double)size / (double)s.segment_count, cell[0],
+                   cell[1], cell[2], cell[3], b.median / l.median);
+        }
+        scene_free(&s);
+    }
+    return failures;
+}
+
+/* ======================================================================== */
 /* Main                                                                     */
 /* ======================================================================== */
 
@@ -1902,6 +2004,8 @@ int main(int argc, char **argv)
     print_machine(&o);
     if (o.animate_frames)
         return run_animation(&o, o.animate_frames);
+    if (o.save_load_count)
+        return save_load_bench(&o) ? 1 : 0;
     static scene_result results[MAX_SCENES];
     if (o.profile) {
         int failures = 0;

@@ -1,0 +1,152 @@
+/* fuzz_load.c - libFuzzer target: arbitrary bytes as a saved BVH.
+   The input's checksum is fixed up first (its last 8 bytes), so that
+   mutations reach the structural checks behind it rather than stopping
+   there; it is then loaded over one fixed small scene (combed fur, 48
+   segments, read in the basis the header names, with fixed tangents for
+   Hermite) with the hair check skipped (mutations need not fix the hair
+   hash either). hairobb_load must return one of its codes, leave no BVH
+   on failure and, on success, give a BVH whose traced hits are sane
+   (fuzz_checks.h); ASan and UBSan see any read out of bounds, including
+   the traversal stack. Seeds, tests/fuzz_corpus/bvh_load: the scene's BVH
+   saved with several option sets, written by this file built with
+   -DFUZZ_LOAD_WRITE_SEEDS (its main writes them into the directory named). */
+#define _POSIX_C_SOURCE 200809L
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <math.h>
+#define HAIROBB_IMPLEMENTATION
+#include "../hairobb.h"
+#include "fuzz_checks.h"
+#include "scenes.h"
+
+static hair_scene fuzz_scene;
+static float *fuzz_tangents;
+
+static void fuzz_setup(void)
+{
+    size_t v;
+    int k;
+    if (fuzz_tangents) return;
+    if (scene_combed(&fuzz_scene, 48, 1) != 0) fuzz_fail("scene");
+    fuzz_tangents = (float *)malloc(4 * sizeof(float) * fuzz_scene.vertex_count);
+    if (!fuzz_tangents) fuzz_fail("tangents");
+    for (v = 0; v < fuzz_scene.vertex_count; ++v)
+        for (k = 0; k < 4; ++k)
+            fuzz_tangents[4 * v + k] = v + 1 < fuzz_scene.vertex_count
+                                           ? 3.0f * (fuzz_scene.vertices[4 * (v + 1) + k] - fuzz_scene.vertices[4 * v + k])
+                                           : 0.0f;
+}
+
+/* Rays through the middle of the loaded bounds, and at some segments. */
+static void trace(const hairobb_bvh *bvh)
+{
+    static const float directions[4][3] = {{0, 0, 1}, {1, 0, 0}, {0.6f, -0.8f, 0}, {0.3f, 0.4f, -0.866f}};
+    float lower[3], upper[3];
+    size_t s;
+    int d, j;
+    hairobb_bounds(bvh, lower, upper);
+    for (d = 0; d < 4; ++d) {
+        hairobb_ray ray;
+        for (j = 0; j < 3; ++j) {
+            float middle = 0.5f * lower[j] + 0.5f * upper[j], extent = upper[j] - lower[j];
+            ray.dir[j] = directions[d][j];
+            ray.org[j] = middle - directions[d][j] * (extent + 1.0f);
+        }
+        ray.tnear = 0.0f;
+        ray.tfar = INFINITY;
+        fuzz_check_ray(bvh, &ray, fuzz_scene.segment_count);
+    }
+    for (s = 0; s < fuzz_scene.segment_count; s += 6) {
+        const float *cp = fuzz_scene.vertices + 4 * (size_t)fuzz_scene.indices[s];
+        hairobb_ray ray;
+        for (j = 0; j < 3; ++j) {
+            ray.dir[j] = directions[s % 4][j];
+            ray.org[j] = 0.5f * cp[4 + j] + 0.5f * cp[8 + j] - ray.dir[j];
+        }
+        ray.tnear = 0.0f;
+        ray.tfar = INFINITY;
+        fuzz_check_ray(bvh, &ray, fuzz_scene.segment_count);
+    }
+}
+
+static hairobb_result fuzz_load(const uint8_t *data, size_t size, hairobb_bvh **bvh)
+{
+    hairobb_build_options options;
+    uint32_t basis = size >= HAIROBB__SAVE_HEADER ? hairobb__get32(data + HAIROBB__AT_BASIS) : 0;
+    memset(&options, 0, sizeof options);
+    options.verify_hair = HAIROBB_OFF;
+    options.basis = basis <= HAIROBB_BASIS_LINEAR ? (hairobb_basis)basis : HAIROBB_BASIS_BEZIER;
+    options.tangents = options.basis == HAIROBB_BASIS_HERMITE ? fuzz_tangents : NULL;
+    return hairobb_load(data, size, fuzz_scene.vertices, fuzz_scene.vertex_count, fuzz_scene.indices,
+                        fuzz_scene.segment_count, &options, bvh);
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    hairobb_bvh *bvh = (hairobb_bvh *)(uintptr_t)1;
+    hairobb_result result;
+    uint8_t *copy;
+    fuzz_setup();
+    copy = (uint8_t *)malloc(size ? size : 1);
+    if (!copy) return 0;
+    if (size) memcpy(copy, data, size);
+    if (size >= 8) hairobb__put64(copy + size - 8, hairobb__save_checksum(copy, size));
+    result = fuzz_load(copy, size, &bvh);
+    free(copy);   /* nothing of the bytes is kept */
+    if (result != HAIROBB_OK) {
+        if (bvh) fuzz_fail("a failed load left a BVH");
+        if (result != HAIROBB_ERROR_INVALID_FILE && result != HAIROBB_ERROR_UNSUPPORTED && result != HAIROBB_ERROR_MISMATCH &&
+            result != HAIROBB_ERROR_OUT_OF_MEMORY)
+            fuzz_fail("a code the loader does not return for these arrays");
+        return 0;
+    }
+    if (!bvh) fuzz_fail("a load without a BVH");
+    trace(bvh);
+    hairobb_free(bvh);
+    return 0;
+}
+
+#ifdef FUZZ_LOAD_WRITE_SEEDS
+#include <stdio.h>
+int main(int argc, char **argv)
+{
+    static const struct { hairobb_obb_layout layout; hairobb_basis basis; unsigned leaf; hairobb_switch spatial; } seeds[] = {
+        {HAIROBB_OBB_DEFAULT, HAIROBB_BASIS_BEZIER, 0, HAIROBB_AUTO},
+        {HAIROBB_OBB_PER_CHILD, HAIROBB_BASIS_BEZIER, 1, HAIROBB_AUTO},
+        {HAIROBB_OBB_SHARED_ROTATION, HAIROBB_BASIS_CATMULL_ROM, 2, HAIROBB_ON},
+        {HAIROBB_OBB_COMPRESSED, HAIROBB_BASIS_HERMITE, 0, HAIROBB_AUTO},
+        {HAIROBB_OBB_COMPRESSED_PER_CHILD, HAIROBB_BASIS_BSPLINE, 3, HAIROBB_ON},
+        {HAIROBB_OBB_DEFAULT, HAIROBB_BASIS_LINEAR, 15, HAIROBB_AUTO},
+    };
+    size_t k;
+    if (argc != 2) { fprintf(stderr, "usage: %s DIRECTORY\n", argv[0]); return 2; }
+    fuzz_setup();
+    for (k = 0; k < sizeof seeds / sizeof seeds[0]; ++k) {
+        hairobb_build_options options;
+        hairobb_bvh *bvh = NULL, *loaded = NULL;
+        char path[4096];
+        memset(&options, 0, sizeof options);
+        options.obb_layout = seeds[k].layout;
+        options.basis = seeds[k].basis;
+        options.tangents = seeds[k].basis == HAIROBB_BASIS_HERMITE ? fuzz_tangents : NULL;
+        options.max_leaf_size = seeds[k].leaf;
+        options.spatial_splits = seeds[k].spatial;
+        options.threads = 1;
+        snprintf(path, sizeof path, "%s/seed%zu.bvh", argv[1], k);
+        if (hairobb_build(fuzz_scene.vertices, fuzz_scene.vertex_count, fuzz_scene.indices, fuzz_scene.segment_count, &options,
+                          &bvh) != HAIROBB_OK ||
+            hairobb_save_file(bvh, path) != HAIROBB_OK ||
+            hairobb_load_file(path, fuzz_scene.vertices, fuzz_scene.vertex_count, fuzz_scene.indices,
+                              fuzz_scene.segment_count, &options, &loaded) != HAIROBB_OK) {
+            fprintf(stderr, "seed %zu failed\n", k);
+            return 1;
+        }
+        printf("%s: %zu bytes\n", path, hairobb_save_size(bvh));
+        hairobb_free(loaded);
+        hairobb_free(bvh);
+    }
+    return 0;
+}
+#endif
