@@ -101,15 +101,17 @@
                              4-wide); the few nodes near the root (AABB nodes,
                              OBB nodes over 256 references) keep floats.
                              _PER_CHILD: the paper's uncompressed node, an
-                             affine map per child (464/240 bytes).
+                             affine map per child (464/240 bytes, then
+                             96/48 bytes of the child frames' directions,
+                             which hairobb_refit makes the frames from).
                              _SHARED_ROTATION: one float rotation per node
                              (304/176 bytes). _COMPRESSED: the paper's
                              compressed node, one byte rotation shared by the
-                             children (160/96 bytes). Measured 8-wide (bench,
-                             README): the default takes 33-35 bytes per
-                             segment against 67-73 for _PER_CHILD, at 2-7%
-                             less primary-ray speed; _COMPRESSED 26-28 at
-                             19-22% less.
+                             children (160/96 bytes). The bench (README)
+                             compares their bytes per segment and speed:
+                             the default takes well under half the bytes
+                             of _PER_CHILD and traced as fast in the
+                             latest runs.
      spatial_splits          HAIROBB_AUTO (= off), _ON, _OFF: also try split
                              planes that clip segments (world and hair space);
                              a clipped segment is referenced by the leaves of
@@ -345,7 +347,7 @@ typedef enum hairobb_precision {
 /* How an OBB node stores its child boxes (sizes for 4-/8-wide nodes). */
 typedef enum hairobb_obb_layout {
     HAIROBB_OBB_DEFAULT = 0,         /* the layout the bench recommends (see BUILD OPTIONS) */
-    HAIROBB_OBB_PER_CHILD,           /* an affine map per child (the paper's uncompressed node): 240/464 bytes */
+    HAIROBB_OBB_PER_CHILD,           /* an affine map per child (the paper's uncompressed node): 240/464 bytes + 48/96 */
     HAIROBB_OBB_SHARED_ROTATION,     /* one float rotation per node, float boxes in it: 176/304 bytes */
     HAIROBB_OBB_COMPRESSED,          /* the paper's: one byte rotation, byte boxes (AABB nodes too): 96/160 bytes */
     HAIROBB_OBB_COMPRESSED_PER_CHILD /* a byte rotation per child, byte boxes (AABB nodes as above): 128/208 bytes */
