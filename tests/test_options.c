@@ -335,6 +335,40 @@ static hairobb_result build_with_progress(const hair_scene *s, int set, progress
     return hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, &opt, bvh);
 }
 
+/* A renderer's task system that runs every task in order, counting its calls. */
+static int parallel_for_calls;
+static void counting_parallel_for(void *user, unsigned count, hairobb_task_fn run, void *context)
+{
+    unsigned i;
+    (void)user;
+    ++parallel_for_calls;
+    for (i = 0; i < count; ++i) run(context, i);
+}
+
+/* The serial top of the tree (above the subtrees that become tasks, 1,024
+   references and more) reports progress and takes a cancel itself: a
+   cancel at the first call stops the build before any task is handed out. */
+static void test_progress_in_top(const hair_scene *s)
+{
+    progress_log log;
+    hairobb_build_options opt;
+    hairobb_bvh *bvh = NULL;
+    hairobb_result r;
+    memset(&log, 0, sizeof log);
+    log.cancel = 0;
+    log.cancelled_at = -1;
+    log.monotone = log.in_range = 1;
+    memset(&opt, 0, sizeof opt);
+    opt.progress = progress_record;
+    opt.progress_user = &log;
+    opt.parallel_for = counting_parallel_for;
+    parallel_for_calls = 0;
+    r = hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, &opt, &bvh);
+    CHECK(r == HAIROBB_ERROR_CANCELLED && bvh == NULL, "%s: cancel in the top: %s", s->name, hairobb_result_string(r));
+    CHECK(parallel_for_calls == 0 && log.calls == 1, "%s: cancel at the first call: %d calls, parallel_for called %d times",
+          s->name, log.calls, parallel_for_calls);
+}
+
 static void test_progress(const hair_scene *s)
 {
     static const char *cancel_names[] = {"the first call", "the first call past 1/2", "the call with 1"};
@@ -384,6 +418,7 @@ static void test_progress(const hair_scene *s)
               live_allocations - live_before);
         if (r == HAIROBB_OK) hairobb_free(bvh);
     }
+    if (s->segment_count > 2048) test_progress_in_top(s);
     printf("%s: progress tests in %.1f s\n", s->name, scene_now() - t0);
 }
 
