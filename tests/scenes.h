@@ -809,6 +809,36 @@ static inline int scene_load_furball(hair_scene *s, const char *path)
 /* ------------------------------------------------------------------------ */
 /* Camera, transform, clock */
 
+
+/* A ray aimed near a random point of the Bezier segment cp (4 control
+   points x, y, z, r): u uniform, the target moved by up to 1.5 r(u) on each
+   axis, the origin 0.05-1 before it, the direction random but at least 30
+   degrees off the tangent there (100 tries). Draws from rng in this order,
+   so a test's rays depend only on its seed. */
+static inline void scene_ray_near_segment(const float *cp, scene_rng *rng, float org[3], float dir[3])
+{
+    float u = scene_rng_float(rng), w = 1.0f - u, distance = scene_rng_range(rng, 0.05f, 1.0f);
+    float b[4], db[4], radius, tangent[3], length;
+    scene_vec3 d;
+    int k, tries;
+    b[0] = w * w * w; b[1] = 3.0f * u * w * w; b[2] = 3.0f * u * u * w; b[3] = u * u * u;
+    db[0] = -3.0f * w * w; db[1] = 3.0f * w * w - 6.0f * u * w; db[2] = 6.0f * u * w - 3.0f * u * u; db[3] = 3.0f * u * u;
+    radius = b[0] * cp[3] + b[1] * cp[7] + b[2] * cp[11] + b[3] * cp[15];
+    for (k = 0; k < 3; ++k) tangent[k] = db[0] * cp[k] + db[1] * cp[4 + k] + db[2] * cp[8 + k] + db[3] * cp[12 + k];
+    length = sqrtf(tangent[0] * tangent[0] + tangent[1] * tangent[1] + tangent[2] * tangent[2]);
+    for (tries = 0;; ++tries) {
+        d = scene_random_unit_vector(rng);
+        if (tries == 100 || !(length > 0.0f) || fabsf(d.x * tangent[0] + d.y * tangent[1] + d.z * tangent[2]) <= 0.866f * length)
+            break;
+    }
+    dir[0] = d.x; dir[1] = d.y; dir[2] = d.z;
+    for (k = 0; k < 3; ++k) {
+        float target = b[0] * cp[k] + b[1] * cp[4 + k] + b[2] * cp[8 + k] + b[3] * cp[12 + k] +
+                       1.5f * radius * scene_rng_range(rng, -1.0f, 1.0f);
+        org[k] = target - distance * dir[k];
+    }
+}
+
 /* Pinhole camera looking at the bounds' centre from +z and a little above
    (direction (0, 0.25, 1)), 2.5 bounding-sphere radii away; the field of view
    is fitted to the projected corners of the bounds (square pixels, 2%

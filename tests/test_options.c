@@ -77,33 +77,12 @@ static void make_rays(const hair_scene *s, ray_set *rays, size_t count)
     scene_rng rng;
     ref_scene *reference;
     size_t i;
-    int k;
     rays->count = count < RAY_COUNT ? count : RAY_COUNT;
     scene_rng_seed(&rng, 77);
     for (i = 0; i < rays->count; ++i) {
         size_t prim = (size_t)scene_rng_u32(&rng) % s->segment_count;
         const float *cp = s->vertices + 4 * (size_t)s->indices[prim];
-        float u = scene_rng_float(&rng), w = 1.0f - u, distance = scene_rng_range(&rng, 0.05f, 1.0f);
-        float b[4], db[4], radius, tangent[3], length;
-        scene_vec3 d;
-        int tries;
-        b[0] = w * w * w; b[1] = 3.0f * u * w * w; b[2] = 3.0f * u * u * w; b[3] = u * u * u;
-        db[0] = -3.0f * w * w; db[1] = 3.0f * w * w - 6.0f * u * w; db[2] = 6.0f * u * w - 3.0f * u * u; db[3] = 3.0f * u * u;
-        radius = b[0] * cp[3] + b[1] * cp[7] + b[2] * cp[11] + b[3] * cp[15];
-        for (k = 0; k < 3; ++k) tangent[k] = db[0] * cp[k] + db[1] * cp[4 + k] + db[2] * cp[8 + k] + db[3] * cp[12 + k];
-        length = sqrtf(tangent[0] * tangent[0] + tangent[1] * tangent[1] + tangent[2] * tangent[2]);
-        for (tries = 0;; ++tries) {
-            d = scene_random_unit_vector(&rng);
-            if (tries == 100 || !(length > 0.0f) ||
-                fabsf(d.x * tangent[0] + d.y * tangent[1] + d.z * tangent[2]) <= 0.866f * length)
-                break;
-        }
-        rays->dir[3 * i] = d.x; rays->dir[3 * i + 1] = d.y; rays->dir[3 * i + 2] = d.z;
-        for (k = 0; k < 3; ++k) {
-            float target = b[0] * cp[k] + b[1] * cp[4 + k] + b[2] * cp[8 + k] + b[3] * cp[12 + k] +
-                           1.5f * radius * scene_rng_range(&rng, -1.0f, 1.0f);
-            rays->org[3 * i + k] = target - distance * rays->dir[3 * i + k];
-        }
+        scene_ray_near_segment(cp, &rng, rays->org + 3 * i, rays->dir + 3 * i);
     }
     reference = ref_build(s->vertices, s->vertex_count, s->indices, s->segment_count);
     CHECK(reference != NULL, "%s: reference build", s->name);
