@@ -1049,6 +1049,18 @@ static size_t hairobb__curve_bytes(size_t segment_count)
     return (16 * sizeof(float) + 2 * sizeof(uint32_t)) * segment_count;
 }
 
+/* Every segment of another basis in Bezier form, 16 floats each, into
+   curves (the build's and the load's conversion, and a refit's again). */
+static void hairobb__to_bezier_all(hairobb_basis basis, const float *vertices, const uint32_t *indices,
+                                   const float *tangents, size_t segment_count, float *curves)
+{
+    size_t i;
+    for (i = 0; i < segment_count; ++i) {
+        size_t at = 4 * (size_t)indices[i];
+        hairobb__to_bezier(basis, vertices + at, tangents ? tangents + at : NULL, curves + 16 * i);
+    }
+}
+
 static float *hairobb__convert_curves(hairobb_basis basis, const float *vertices, const uint32_t *indices,
                                       const float *tangents, size_t segment_count, void *user)
 {
@@ -1056,12 +1068,9 @@ static float *hairobb__convert_curves(hairobb_basis basis, const float *vertices
     uint32_t *curve_indices;
     size_t i;
     if (!curves) return NULL;
+    hairobb__to_bezier_all(basis, vertices, indices, tangents, segment_count, curves);
     curve_indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, curves + 16 * segment_count));
-    for (i = 0; i < segment_count; ++i) {
-        size_t at = 4 * (size_t)indices[i];
-        hairobb__to_bezier(basis, vertices + at, tangents ? tangents + at : NULL, curves + 16 * i);
-        curve_indices[i] = (uint32_t)(4 * i);
-    }
+    for (i = 0; i < segment_count; ++i) curve_indices[i] = (uint32_t)(4 * i);
     memcpy(curve_indices + segment_count, indices, segment_count * sizeof(uint32_t));
     return curves;
 }
@@ -2743,6 +2752,14 @@ static uint64_t hairobb__build_range(hairobb__builder *b, const hairobb__range *
 /* ------------------------------------------------------------------------ */
 /* Builder: tasks on threads, then one tree                                  */
 /* ------------------------------------------------------------------------ */
+/* References of the largest subtree built (or refitted) as one task: about
+   HAIROBB__TASKS of them, of at least HAIROBB__TASK_MIN references; from
+   the input alone, so any thread count builds the same tree. */
+static size_t hairobb__task_limit(size_t references)
+{
+    return references / HAIROBB__TASKS > HAIROBB__TASK_MIN ? references / HAIROBB__TASKS : HAIROBB__TASK_MIN;
+}
+
 /* Positions the frame boxes hold for a builder over `positions` of them: the
    most a range binned in a frame spans. Above the tasks a mixed tree bins
    ranges of at most task_limit references in hair space
@@ -3081,7 +3098,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     b.capacity = segment_count + extra;
     /* the top of the tree here, subtrees of at most task_limit references as
        tasks; the limit depends on the input alone (same tree on any thread count) */
-    b.task_limit = segment_count / HAIROBB__TASKS > HAIROBB__TASK_MIN ? segment_count / HAIROBB__TASKS : HAIROBB__TASK_MIN;
+    b.task_limit = hairobb__task_limit(segment_count);
     {
         /* each reference is binned about once per halving from the root to task_limit */
         size_t halvings = 0, size;
@@ -3252,20 +3269,18 @@ static float hairobb__child_area(const unsigned char *node_memory, unsigned type
             extent[k] = 1.0f / sqrtf(a * a + b * b + c * c);
         }
     } else {
-        float frame[9];
-        const float *step;
+        float frames[HAIROBB__W][9];
+        const float *step, *frame;
         const signed char *lower, *upper;
         if (type == HAIROBB__REF_QOBB_PER_CHILD) {
             const hairobb__compressed_obb_node *node = HAIROBB__CAST(const hairobb__compressed_obb_node *, (const void *)node_memory);
-            signed char bytes[9];
-            for (k = 0; k < 9; ++k) bytes[k] = node->rotation[k][lane];
-            hairobb__decode_rotation(bytes, frame);
+            hairobb__node_frames(node_memory, type, lane + 1, frames);
+            frame = frames[lane];
             step = node->step; lower = node->lower[0]; upper = node->upper[0];
         } else {
             const hairobb__compressed_node *node = HAIROBB__CAST(const hairobb__compressed_node *, (const void *)node_memory);
-            float frames[HAIROBB__W][9];
             hairobb__node_frames(node_memory, type, 1, frames);
-            memcpy(frame, frames[0], sizeof frame);
+            frame = frames[0];
             step = node->step; lower = node->lower[0]; upper = node->upper[0];
         }
         for (k = 0; k < 3; ++k)
@@ -3484,7 +3499,7 @@ static void hairobb__refit_tree(hairobb_bvh *bvh)
     hairobb__prepare_frame(identity, &f.world);
     for (k = 0; k < 3; ++k) f.axis_norms[k] = 1.0f + 1.0f / 1048576.0f;   /* hairobb__node_box's for unit rows */
     /* as the build's tasks: about HAIROBB__TASKS of them */
-    f.task_limit = count / HAIROBB__TASKS > HAIROBB__TASK_MIN ? count / HAIROBB__TASKS : HAIROBB__TASK_MIN;
+    f.task_limit = hairobb__task_limit(count);
     if (count > f.task_limit) {
         hairobb__refit_top(&f, bvh->root, 0, count, 0, &box);
         f.tasks = HAIROBB__CAST(hairobb__refit_task *, HAIROBB_MALLOC(f.task_count * sizeof *f.tasks, f.b.user));
@@ -3529,21 +3544,15 @@ HAIROBB_DEF hairobb_result hairobb_refit_tangents(hairobb_bvh *bvh, const float 
 {
     const uint32_t *indices;
     hairobb_result result;
-    size_t i;
     if (!bvh || !vertices || (bvh->basis == HAIROBB_BASIS_HERMITE) != (tangents != NULL)) return HAIROBB_ERROR_INVALID_ARGUMENT;
     indices = bvh->basis == HAIROBB_BASIS_BEZIER ? bvh->indices : bvh->source_indices;
     /* all checked before anything is written: on an error the BVH traces the old positions */
     result = hairobb__validate(vertices, bvh->vertex_count, indices, bvh->segment_count, hairobb__basis_points(bvh->basis), tangents);
     if (result != HAIROBB_OK) return result;
-    if (bvh->basis == HAIROBB_BASIS_BEZIER) {
+    if (bvh->basis == HAIROBB_BASIS_BEZIER)
         bvh->vertices = vertices;
-    } else {
-        float *curves = HAIROBB__CAST(float *, bvh->curves);
-        for (i = 0; i < bvh->segment_count; ++i) {
-            size_t at = 4 * (size_t)indices[i];
-            hairobb__to_bezier(bvh->basis, vertices + at, tangents ? tangents + at : NULL, curves + 16 * i);
-        }
-    }
+    else
+        hairobb__to_bezier_all(bvh->basis, vertices, indices, tangents, bvh->segment_count, HAIROBB__CAST(float *, bvh->curves));
     hairobb__refit_tree(bvh);
     return HAIROBB_OK;
 }
@@ -3724,8 +3733,9 @@ typedef struct hairobb__tree_check {
 static int hairobb__check_tree(hairobb__tree_check *c, uint64_t ref, unsigned depth)
 {
     unsigned type = HAIROBB__REF_TYPE(ref);
-    size_t offset = (size_t)(ref & ~(uint64_t)15), size, stride, granule, children = 0;
-    int i, empty_seen = 0;
+    size_t offset = (size_t)(ref & ~(uint64_t)15), stride, granule;
+    uint64_t child[HAIROBB__W];
+    int i, child_count;
     if (type == HAIROBB__REF_LEAF) {
         uint64_t first = ref >> 8, count = (ref >> 4) & 15u;
         if (count == 0 || count > c->max_leaf || first != c->next_leaf || count > c->leaf_prim_count - c->next_leaf) return 0;
@@ -3741,7 +3751,6 @@ static int hairobb__check_tree(hairobb__tree_check *c, uint64_t ref, unsigned de
     if (!(c->inner_types >> type & 1u) || (ref >> 4) > (uint64_t)((size_t)-1 >> 4) ||
         (size_t)(HAIROBB__W - 1) * depth + HAIROBB__W > HAIROBB__STACK)
         return 0;
-    size = hairobb__node_size(type);
     stride = hairobb__node_stride(type);   /* with what follows the node (an affine OBB node's directions) */
     if (offset > c->node_bytes || stride > c->node_bytes - offset) return 0;
     for (granule = offset / 16; granule < (offset + stride) / 16; ++granule) {
@@ -3751,14 +3760,12 @@ static int hairobb__check_tree(hairobb__tree_check *c, uint64_t ref, unsigned de
     c->reached_bytes += stride;
     if (type == HAIROBB__REF_AABB || type == HAIROBB__REF_QAABB) c->stats.aabb_nodes++; else c->stats.obb_nodes++;
     /* 2..W children, the empty lanes last (as hairobb__build_node fills them) */
-    for (i = 0; i < HAIROBB__W; ++i) {
-        uint64_t child;
-        memcpy(&child, c->nodes + offset + size - HAIROBB__W * sizeof(uint64_t) + i * sizeof child, sizeof child);
-        if (child == HAIROBB__REF_EMPTY) { empty_seen = 1; continue; }
-        if (empty_seen || !hairobb__check_tree(c, child, depth + 1)) return 0;
-        ++children;
-    }
-    return children >= 2;
+    child_count = hairobb__children(c->nodes, ref, child);
+    for (i = child_count; i < HAIROBB__W; ++i)
+        if (child[i] != HAIROBB__REF_EMPTY) return 0;
+    for (i = 0; i < child_count; ++i)
+        if (!hairobb__check_tree(c, child[i], depth + 1)) return 0;
+    return child_count >= 2;
 }
 
 /* The node types a layout and policy build (hairobb__build_node). */
