@@ -911,6 +911,15 @@ struct hairobb_bvh {
     hairobb_stats stats;
 };
 
+/* The Bezier control points (x y z r, 4 each) of segment prim as traced:
+   every traversal path reads a segment through here. scratch: room for
+   points made on the fly (unused while every basis is stored as Bezier). */
+HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uint32_t prim, float scratch[16])
+{
+    (void)scratch;
+    return bvh->vertices + 4 * (size_t)bvh->indices[prim];
+}
+
 /* ------------------------------------------------------------------------ */
 /* Input: validation and per-segment bounds                                  */
 /* ------------------------------------------------------------------------ */
@@ -3530,8 +3539,8 @@ static void hairobb__refit_tree(hairobb_bvh *bvh)
         /* the bounds are the whole segments', not their clipped parts' */
         hairobb__box_empty(lower, upper);
         for (k = 0; k < bvh->segment_count; ++k) {
-            float lo[3], hi[3];
-            hairobb__segment_box_prep(bvh->vertices + 4 * (size_t)bvh->indices[k], &f.world, NULL, NULL, lo, hi);
+            float lo[3], hi[3], scratch[16];
+            hairobb__segment_box_prep(hairobb__segment_points(bvh, (uint32_t)k, scratch), &f.world, NULL, NULL, lo, hi);
             hairobb__box_grow(lower, upper, lo, hi);
         }
     }
@@ -4146,10 +4155,10 @@ static int hairobb__ray_setup_from(hairobb__ray_state *rs, const hairobb_bvh *bv
                                    const hairobb_ray *ray)
 {
     const float *cp;
-    float max_r, magnitude;
+    float max_r, magnitude, scratch[16];
     if (!hairobb__ray_setup(rs, bvh, ray)) return 0;
     if (!from || from->prim_id >= bvh->segment_count) return 1;
-    cp = bvh->vertices + 4 * (size_t)bvh->indices[from->prim_id];
+    cp = hairobb__segment_points(bvh, from->prim_id, scratch);
     max_r = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
     magnitude = hairobb__maxf(hairobb__maxf(fabsf(ray->org[0]), fabsf(ray->org[1])), fabsf(ray->org[2]));
     rs->skip_t = (2.0f * max_r + magnitude * (8.0f * FLT_EPSILON)) * rs->inv_dir_length;
@@ -4745,11 +4754,12 @@ static int hairobb__refine_dip(hairobb__ray_state *rs, const hairobb__ray_poly *
    ribbons part by more than rounding, as the definition has them.) */
 static int hairobb__joint_at(const hairobb_bvh *bvh, uint32_t prim, int end)
 {
-    const float *p = bvh->vertices + 4 * (size_t)bvh->indices[prim] + 12 * end, *q;
-    float a[3], b[3], cross[3];
+    float scratch[2][16], a[3], b[3], cross[3];
+    const float *p, *q;
     int k;
     if (end ? (size_t)prim + 1 >= bvh->segment_count : prim == 0) return 0;
-    q = bvh->vertices + 4 * (size_t)bvh->indices[end ? prim + 1 : prim - 1] + 12 * (1 - end);
+    p = hairobb__segment_points(bvh, prim, scratch[0]) + 12 * end;
+    q = hairobb__segment_points(bvh, end ? prim + 1 : prim - 1, scratch[1]) + 12 * (1 - end);
     if (!(p[0] == q[0] && p[1] == q[1] && p[2] == q[2])) return 0;
     /* both tangents pointing along the strand, away from the joint's first segment */
     for (k = 0; k < 3; ++k) {
@@ -4961,10 +4971,10 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
 {
     hairobb__ray_curve c;
     hairobb__v4 qx, qy, qz, x, y, z, r, reach, neg_reach;
-    float max_r, magnitude;
+    float max_r, magnitude, scratch[16];
     int inside;
     HAIROBB__COUNT(segment);
-    hairobb__ray_points_v4(rs, bvh->vertices + 4 * (size_t)bvh->indices[prim], &qx, &qy, &qz, &r);
+    hairobb__ray_points_v4(rs, hairobb__segment_points(bvh, prim, scratch), &qx, &qy, &qz, &r);
     x = hairobb__ray_row_v4(rs, 0, qx, qy, qz);
     y = hairobb__ray_row_v4(rs, 1, qx, qy, qz);
     max_r = hairobb__v4_hmax(r);
@@ -5007,7 +5017,8 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
 /* The segment a secondary ray leaves, or one joined to its ends. */
 static int hairobb__skipped(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint32_t prim)
 {
-    const float *cp = bvh->vertices + 4 * (size_t)bvh->indices[prim];
+    float scratch[16];
+    const float *cp = hairobb__segment_points(bvh, prim, scratch);
     return prim == rs->skip_prim ||
            (cp[0] == rs->skip_last[0] && cp[1] == rs->skip_last[1] && cp[2] == rs->skip_last[2]) ||
            (cp[12] == rs->skip_first[0] && cp[13] == rs->skip_first[1] && cp[14] == rs->skip_first[2]);
@@ -5059,7 +5070,8 @@ HAIROBB__INLINE void hairobb__bezier_v4(hairobb__v4 p0, hairobb__v4 p1, hairobb_
 static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint32_t prim, const hairobb__ray_curve *c,
                             float u, float t, hairobb_hit *hit)
 {
-    const float *cp = bvh->vertices + 4 * (size_t)bvh->indices[prim];
+    float scratch[16];
+    const float *cp = hairobb__segment_points(bvh, prim, scratch);
     hairobb__v4 x4 = hairobb__v4_load(c->x), y4 = hairobb__v4_load(c->y), z4 = hairobb__v4_set1(0.0f), r4 = hairobb__v4_load(c->r);
     hairobb__v4 value, d1, tangent, neg_dir, n4;
     float at[4], tangent_at[4], tangent_xy[2], x, y, r, tlen2, along, n[4], nlen;
@@ -5103,7 +5115,8 @@ static int hairobb__hit_filtered_out(const hairobb__ray_state *rs, uint32_t prim
     hairobb_hit hit;
     hairobb__ray_curve c;
     hairobb__v4 qx, qy, qz, r;
-    hairobb__ray_points_v4(rs, rs->bvh->vertices + 4 * (size_t)rs->bvh->indices[prim], &qx, &qy, &qz, &r);
+    float scratch[16];
+    hairobb__ray_points_v4(rs, hairobb__segment_points(rs->bvh, prim, scratch), &qx, &qy, &qz, &r);
     hairobb__v4_store(c.x, hairobb__ray_row_v4(rs, 0, qx, qy, qz));
     hairobb__v4_store(c.y, hairobb__ray_row_v4(rs, 1, qx, qy, qz));
     hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));
