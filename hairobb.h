@@ -163,11 +163,18 @@
                              and _LINEAR (2 points) follow Embree's curve
                              types of those names; the build converts each
                              segment exactly to Bezier form (a basis change:
-                             the same cubic, the same u) into 72 bytes per
-                             segment it owns (with a copy of the indices,
-                             for hairobb_refit), so then the caller's
-                             arrays may go after the build. Radii a
-                             conversion takes below 0 are clamped to 0.
+                             the same cubic, the same u) where it reads one.
+                             Radii a conversion takes below 0 are clamped to 0.
+     bezier_copy             other bases: AUTO/OFF (default) read the caller's
+                             vertices, indices (and tangents), which must
+                             then outlive the BVH as Bezier input's do, and
+                             convert a segment each time one is read (no
+                             bytes per segment besides nodes and leaves).
+                             ON converts every segment once into a copy the
+                             BVH owns, 72 bytes per segment (16 floats, its
+                             index and the caller's, for hairobb_refit); the
+                             caller's arrays may then go after the build.
+                             Both give the same tree and bit-identical hits.
      hit_filter, _user       hit_filter(user, ray, hit) for each hit found
                              in [tnear, tfar] (nearer than the best so far
                              for intersect1, any for occluded1), on the
@@ -426,6 +433,7 @@ typedef struct hairobb_build_options {
     hairobb_parallel_for_fn parallel_for; /* NULL: the library's threads (see `threads`) */
     void *parallel_for_user;
     hairobb_switch verify_hair;      /* hairobb_load: AUTO/ON compare the hair with the saved hash, OFF skip it */
+    hairobb_switch bezier_copy;      /* bases other than Bezier: AUTO/OFF read the caller's arrays, ON convert a copy */
 } hairobb_build_options;
 
 typedef struct hairobb_bvh hairobb_bvh;
@@ -441,8 +449,9 @@ HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh);
 /* Refit (see REFIT): the same segments at new positions (and radii),
    vertices as the build's (the same vertex_count and indices). The tree
    keeps its topology and frames; every box is recomputed. For Bezier input
-   the BVH keeps the new pointer (keep it alive and unchanged); other bases
-   are converted again into the curves it owns. NULL: INVALID_ARGUMENT;
+   the BVH keeps the new pointer (keep it alive and unchanged), as for other
+   bases without bezier_copy; with it they are converted again into the
+   curves it owns. NULL: INVALID_ARGUMENT;
    NaN/Inf, |coordinate| > 1e18 or a negative radius: INVALID_GEOMETRY,
    and the BVH is left as it was. Hermite BVHs need new tangents too:
    hairobb_refit_tangents (tangents NULL for every other basis). Not while
@@ -483,7 +492,8 @@ HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, si
    over the same hair it was built on: the caller's arrays as hairobb_build
    takes them (the BVH keeps pointers to them, see MEMORY LIFETIME) and
    options (may be NULL) for basis, tangents, simd, hit_filter,
-   allocator_user and verify_hair; every other option is the saved BVH's.
+   allocator_user, verify_hair and bezier_copy; every other option is the
+   saved BVH's (a BVH saved with or without the copy loads either way).
    It traces as the saved BVH did, bit for bit. On failure *out is NULL and
    nothing is leaked: HAIROBB_ERROR_INVALID_FILE (anything wrong in the
    bytes), _UNSUPPORTED (saved by another format version, node width or
@@ -909,15 +919,23 @@ struct hairobb_bvh {
     /* Bernstein weights of the pieces' start and end points: [chunk][start/end][basis][lane] */
     float piece_weights[2][2][4][8];
     hairobb_stats stats;
+    /* how vertices and indices hold segments: Bezier (Bezier input, or the
+       copy in curves), or the caller's arrays in basis, with tangents */
+    hairobb_basis point_basis;
+    const float *tangents;
 };
+
+static void hairobb__to_bezier(hairobb_basis basis, const float *p, const float *t, float b[16]);
 
 /* The Bezier control points (x y z r, 4 each) of segment prim as traced:
    every traversal path reads a segment through here. scratch: room for
-   points made on the fly (unused while every basis is stored as Bezier). */
+   points made on the fly (other bases read without the copy). */
 HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uint32_t prim, float scratch[16])
 {
-    (void)scratch;
-    return bvh->vertices + 4 * (size_t)bvh->indices[prim];
+    size_t at = 4 * (size_t)bvh->indices[prim];
+    if (bvh->point_basis == HAIROBB_BASIS_BEZIER) return bvh->vertices + at;
+    hairobb__to_bezier(bvh->point_basis, bvh->vertices + at, bvh->tangents ? bvh->tangents + at : NULL, scratch);
+    return scratch;
 }
 
 /* ------------------------------------------------------------------------ */
@@ -1530,6 +1548,8 @@ typedef struct hairobb__tries {
 typedef struct hairobb__builder {
     const float *vertices;
     const uint32_t *indices;
+    hairobb_basis basis;              /* of vertices and indices (Bezier, or read without the copy) */
+    const float *tangents;
     uint32_t *ids;                    /* segment of each position */
     float *ranges;                    /* u0, u1 per position; NULL without spatial splits: all [0, 1] */
     float *world_boxes;               /* 6 per position: lower, upper */
@@ -1596,16 +1616,29 @@ static const float *hairobb__clipped_points(const float *cp, double u0, double u
     return scratch;
 }
 
+/* The Bezier control points of segment id as the builder reads it. */
+HAIROBB__INLINE const float *hairobb__builder_points(const hairobb__builder *b, uint32_t id, float scratch[16])
+{
+    size_t at = 4 * (size_t)b->indices[id];
+    if (b->basis == HAIROBB_BASIS_BEZIER) return b->vertices + at;
+    hairobb__to_bezier(b->basis, b->vertices + at, b->tangents ? b->tangents + at : NULL, scratch);
+    return scratch;
+}
+
 /* Control points of the reference at position i: the caller's, or its
    clipped part's. Inline: most references are whole segments, and every
    box pass asks. */
 HAIROBB__INLINE const float *hairobb__ref_points(const hairobb__builder *b, size_t i, float scratch[16])
 {
     static const float whole[2] = {0.0f, 1.0f};
-    const float *cp = b->vertices + 4 * (size_t)b->indices[b->ids[i]];
+    float converted[16];
+    const float *cp = hairobb__builder_points(b, b->ids[i], converted);
     /* the bits of [0, 1]: u0 is +0 or above (set_range's 0, or a clip strictly inside);
        no ranges (a refit of a tree without clipped references): all whole */
-    if (!b->ranges || memcmp(b->ranges + 2 * i, whole, sizeof whole) == 0) return cp;
+    if (!b->ranges || memcmp(b->ranges + 2 * i, whole, sizeof whole) == 0) {
+        if (cp == converted) { memcpy(scratch, converted, sizeof converted); return scratch; }
+        return cp;
+    }
     return hairobb__clipped_points(cp, b->ranges[2 * i], b->ranges[2 * i + 1], scratch);
 }
 
@@ -2235,8 +2268,8 @@ static int hairobb__side(const hairobb__builder *b, size_t i, const hairobb__spl
 static int hairobb__clip(hairobb__builder *b, size_t i, size_t extra, const hairobb__split *split)
 {
     float frame_row[3] = {0.0f, 0.0f, 0.0f}, plane, u0 = b->ranges[2 * i], u1 = b->ranges[2 * i + 1];
-    float lo = u0, hi = u1, c0, c1, uc;
-    const float *cp = b->vertices + 4 * (size_t)b->indices[b->ids[i]];
+    float lo = u0, hi = u1, c0, c1, uc, converted[16];
+    const float *cp = hairobb__builder_points(b, b->ids[i], converted);
     int iteration, k;
     if (split->hair_space) memcpy(frame_row, split->frame + 3 * split->axis, sizeof frame_row);
     else frame_row[split->axis] = 1.0f;
@@ -3130,13 +3163,17 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
         (b.frame_capacity && !b.frame_boxes))
         goto failed;
     bvh->vertex_count = vertex_count;
-    if (opt.basis != HAIROBB_BASIS_BEZIER) {
+    bvh->source_indices = indices;
+    if (opt.basis != HAIROBB_BASIS_BEZIER && opt.bezier_copy == HAIROBB_ON) {
         float *curves = hairobb__convert_curves(opt.basis, vertices, indices, opt.tangents, segment_count, b.user);
         if (!curves) goto failed;
         bvh->curves = curves;
         b.vertices = vertices = curves;
         b.indices = indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, curves + 16 * segment_count));
         bvh->source_indices = indices + segment_count;
+    } else {
+        b.basis = opt.basis;
+        b.tangents = opt.tangents;
     }
     b.error = HAIROBB_OK;
 
@@ -3187,6 +3224,8 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     bvh->segment_count = segment_count;
     bvh->vertex_count = vertex_count;
     bvh->basis = opt.basis;
+    bvh->point_basis = b.basis;
+    bvh->tangents = b.tangents;
     bvh->threads = opt.threads;
     bvh->parallel_for = opt.parallel_for;
     bvh->parallel_for_user = opt.parallel_for_user;
@@ -3500,6 +3539,8 @@ static void hairobb__refit_tree(hairobb_bvh *bvh)
     memset(&f, 0, sizeof f);
     f.b.vertices = bvh->vertices;
     f.b.indices = bvh->indices;
+    f.b.basis = bvh->point_basis;
+    f.b.tangents = bvh->tangents;
     f.b.ids = bvh->leaf_prims;
     f.b.ranges = bvh->leaf_ranges;
     f.b.user = bvh->allocator_user;
@@ -3554,13 +3595,14 @@ HAIROBB_DEF hairobb_result hairobb_refit_tangents(hairobb_bvh *bvh, const float 
     const uint32_t *indices;
     hairobb_result result;
     if (!bvh || !vertices || (bvh->basis == HAIROBB_BASIS_HERMITE) != (tangents != NULL)) return HAIROBB_ERROR_INVALID_ARGUMENT;
-    indices = bvh->basis == HAIROBB_BASIS_BEZIER ? bvh->indices : bvh->source_indices;
+    indices = bvh->source_indices;
     /* all checked before anything is written: on an error the BVH traces the old positions */
     result = hairobb__validate(vertices, bvh->vertex_count, indices, bvh->segment_count, hairobb__basis_points(bvh->basis), tangents);
     if (result != HAIROBB_OK) return result;
-    if (bvh->basis == HAIROBB_BASIS_BEZIER)
+    if (!bvh->curves) {
         bvh->vertices = vertices;
-    else
+        bvh->tangents = tangents;
+    } else
         hairobb__to_bezier_all(bvh->basis, vertices, indices, tangents, bvh->segment_count, HAIROBB__CAST(float *, bvh->curves));
     hairobb__refit_tree(bvh);
     return HAIROBB_OK;
@@ -3655,7 +3697,7 @@ static uint64_t hairobb__save_checksum(const unsigned char *saved, size_t size)
    the converted curves' 4 a segment (the hash covers what is traced). */
 static size_t hairobb__traced_vertex_count(const hairobb_bvh *bvh)
 {
-    return bvh->curves ? 4 * bvh->segment_count : bvh->vertex_count;
+    return bvh->basis != HAIROBB_BASIS_BEZIER ? 4 * bvh->segment_count : bvh->vertex_count;
 }
 
 static uint64_t hairobb__hair_hash(const float *vertices, size_t vertex_count, const uint32_t *indices, size_t segment_count)
@@ -3663,6 +3705,51 @@ static uint64_t hairobb__hair_hash(const float *vertices, size_t vertex_count, c
     uint64_t h = hairobb__hash_word(hairobb__hash_word(UINT64_C(0x6f6262), (uint64_t)vertex_count), (uint64_t)segment_count);
     h = hairobb__hash(h, vertices, 4 * sizeof(float) * vertex_count);
     return hairobb__hash(h, indices, sizeof(uint32_t) * segment_count);
+}
+
+/* hairobb__hair_hash of the Bezier segments a BVH traces. Without the copy
+   each segment is converted as it is hashed: the same bytes hairobb__hash
+   reads from the copy (two of its 32-byte blocks a segment, then the
+   indices 4 i), so a BVH saved with the copy loads without it and back. */
+static uint64_t hairobb__traced_hash(const hairobb_bvh *bvh)
+{
+    size_t n = bvh->segment_count, i;
+    uint64_t lane[4], word[4], h;
+    uint32_t ix[8];
+    int k, j;
+    if (bvh->point_basis == HAIROBB_BASIS_BEZIER)
+        return hairobb__hair_hash(bvh->vertices, hairobb__traced_vertex_count(bvh), bvh->indices, n);
+    h = hairobb__hash_word(hairobb__hash_word(UINT64_C(0x6f6262), (uint64_t)(4 * n)), (uint64_t)n);
+    for (k = 0; k < 4; ++k) lane[k] = h + (uint64_t)k;
+    for (i = 0; i < n; ++i) {
+        float scratch[16];
+        const float *cp = hairobb__segment_points(bvh, (uint32_t)i, scratch);
+        for (j = 0; j < 2; ++j) {
+            memcpy(word, cp + 8 * j, 32);
+            for (k = 0; k < 4; ++k) lane[k] = hairobb__hash_word(lane[k], word[k]);
+        }
+    }
+    h = hairobb__hash_word(hairobb__hash_word(hairobb__hash_word(lane[0], lane[1]), lane[2]), lane[3]);
+    h = hairobb__hash_word(h, (uint64_t)(64 * n));
+    for (k = 0; k < 4; ++k) lane[k] = h + (uint64_t)k;
+    for (i = 0; i + 8 <= n; i += 8) {
+        for (j = 0; j < 8; ++j) ix[j] = (uint32_t)(4 * (i + (size_t)j));
+        memcpy(word, ix, 32);
+        for (k = 0; k < 4; ++k) lane[k] = hairobb__hash_word(lane[k], word[k]);
+    }
+    h = hairobb__hash_word(hairobb__hash_word(hairobb__hash_word(lane[0], lane[1]), lane[2]), lane[3]);
+    for (; i + 2 <= n; i += 2) {
+        ix[0] = (uint32_t)(4 * i); ix[1] = (uint32_t)(4 * i + 4);
+        memcpy(word, ix, 8);
+        h = hairobb__hash_word(h, word[0]);
+    }
+    if (i < n) {
+        word[0] = 0;
+        ix[0] = (uint32_t)(4 * i);
+        memcpy(word, ix, 4);
+        h = hairobb__hash_word(h, word[0]);
+    }
+    return hairobb__hash_word(h, (uint64_t)(4 * n));
 }
 
 static void hairobb__put32(unsigned char *at, uint32_t v) { memcpy(at, &v, sizeof v); }
@@ -3700,7 +3787,7 @@ HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, si
     hairobb__put32(out + HAIROBB__AT_FLAGS, bvh->leaf_ranges ? HAIROBB__SAVE_RANGES : 0u);
     hairobb__put64(out + HAIROBB__AT_SEGMENTS, bvh->segment_count);
     hairobb__put64(out + HAIROBB__AT_VERTICES, hairobb__traced_vertex_count(bvh));
-    hairobb__put64(out + HAIROBB__AT_HAIR_HASH, hairobb__hair_hash(bvh->vertices, hairobb__traced_vertex_count(bvh), bvh->indices, bvh->segment_count));
+    hairobb__put64(out + HAIROBB__AT_HAIR_HASH, hairobb__traced_hash(bvh));
     hairobb__put64(out + HAIROBB__AT_ROOT, bvh->root);
     hairobb__put64(out + HAIROBB__AT_NODE_BYTES, bvh->node_bytes);
     hairobb__put64(out + HAIROBB__AT_LEAF_PRIMS, bvh->leaf_prim_count);
@@ -3868,18 +3955,23 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
     bvh->vertex_count = vertex_count;
     memset(&check, 0, sizeof check);
     result = HAIROBB_ERROR_OUT_OF_MEMORY;
-    if (opt.basis != HAIROBB_BASIS_BEZIER) {
+    bvh->source_indices = indices;
+    bvh->basis = opt.basis;
+    if (opt.basis != HAIROBB_BASIS_BEZIER && opt.bezier_copy == HAIROBB_ON) {
         float *curves = hairobb__convert_curves(opt.basis, vertices, indices, opt.tangents, segment_count, user);
         if (!curves) goto failed;
         bvh->curves = curves;
         bvh->vertices = curves;
         bvh->indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, curves + 16 * segment_count));
         bvh->source_indices = bvh->indices + segment_count;
+    } else {
+        bvh->point_basis = opt.basis;
+        bvh->tangents = opt.tangents;
     }
     bvh->segment_count = segment_count;
     if (opt.verify_hair != HAIROBB_OFF &&
         (hairobb__get64(in + HAIROBB__AT_VERTICES) != (uint64_t)hairobb__traced_vertex_count(bvh) ||
-         hairobb__get64(in + HAIROBB__AT_HAIR_HASH) != hairobb__hair_hash(bvh->vertices, hairobb__traced_vertex_count(bvh), bvh->indices, segment_count))) {
+         hairobb__get64(in + HAIROBB__AT_HAIR_HASH) != hairobb__traced_hash(bvh))) {
         result = HAIROBB_ERROR_MISMATCH;
         goto failed;
     }

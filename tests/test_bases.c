@@ -141,8 +141,8 @@ static void check_basis(hairobb_basis basis, const strands *st)
     if (basis != HAIROBB_BASIS_BEZIER) {
         hairobb_stats stats;
         hairobb_get_stats(bvh, &stats);
-        CHECK(hairobb_memory_bytes(bvh) == sizeof(hairobb_bvh) + stats.node_bytes + 64 + stats.leaf_bytes + 72 * segments,
-              "%s: memory counts the 72 bytes per segment the conversion owns", name);
+        CHECK(hairobb_memory_bytes(bvh) == sizeof(hairobb_bvh) + stats.node_bytes + 64 + stats.leaf_bytes,
+              "%s: without the copy the BVH holds nodes and leaves only", name);
     }
 
     memset(&framing, 0, sizeof framing);
@@ -200,6 +200,134 @@ static void check_basis(hairobb_basis basis, const strands *st)
     free(dir);
 }
 
+/* 1 if two hits are the same bits (t, u, v, Ng, tangent, prim). */
+static int same_hit(int got_a, const hairobb_hit *a, int got_b, const hairobb_hit *b)
+{
+    return got_a == got_b && (!got_a || memcmp(a, b, sizeof *a) == 0);
+}
+
+/* Hits of a and b over camera rays and rays in random directions: the
+   number that differ in any bit. */
+static size_t hit_differences(const hairobb_bvh *a, const hairobb_bvh *b, const float *org, const float *dir, size_t rays)
+{
+    size_t i, differ = 0;
+    uint32_t seed = 12345u;
+    for (i = 0; i < 2 * rays; ++i) {
+        hairobb_ray ray;
+        hairobb_hit ha, hb;
+        int ga, gb, k;
+        if (i < rays) {
+            for (k = 0; k < 3; ++k) { ray.org[k] = org[3 * i + k]; ray.dir[k] = dir[3 * i + k]; }
+        } else {   /* from inside the hair, any direction */
+            for (k = 0; k < 3; ++k) {
+                seed = seed * 1664525u + 1013904223u;
+                ray.dir[k] = (float)(seed >> 8) / 16777216.0f - 0.5f;
+                seed = seed * 1664525u + 1013904223u;
+                ray.org[k] = ((float)(seed >> 8) / 16777216.0f - 0.5f) * (k == 2 ? 2.0f : 1.0f) + (k == 2 ? 1.0f : 0.0f);
+            }
+        }
+        ray.tnear = 0.0f;
+        ray.tfar = INFINITY;
+        ga = hairobb_intersect1(a, &ray, &ha);
+        gb = hairobb_intersect1(b, &ray, &hb);
+        differ += !same_hit(ga, &ha, gb, &hb);
+        ga = hairobb_occluded1(a, &ray);
+        gb = hairobb_occluded1(b, &ray);
+        differ += ga != gb;
+    }
+    return differ;
+}
+
+/* bezier_copy OFF (the caller's arrays, converted where read) against ON
+   (today's converted copy): the same saved bytes (the same tree), hits the
+   same bits, after a refit with new arrays too, and a BVH saved either way
+   loads either way. With spatial splits too (the clip converts). */
+static void check_copy(hairobb_basis basis, const strands *st, int splits)
+{
+    size_t segments, i, rays = (size_t)SIDE * SIDE, size_off, size_on;
+    uint32_t *indices = make_indices(basis, &segments);
+    float *moved = aligned_floats(4 * st->count), *moved_tangents = NULL, *org = (float *)malloc(12 * rays),
+          *dir = (float *)malloc(12 * rays);
+    const float *tangents = basis == HAIROBB_BASIS_HERMITE ? st->tangents : NULL;
+    hairobb_build_options options;
+    hairobb_bvh *off = NULL, *on = NULL, *loaded = NULL;
+    hairobb_stats stats;
+    hair_scene framing;
+    unsigned char *saved_off, *saved_on;
+    const char *name = basis_names[basis];
+    int copy;
+
+    memset(&options, 0, sizeof options);
+    options.basis = basis;
+    options.tangents = tangents;
+    options.spatial_splits = splits ? HAIROBB_ON : HAIROBB_OFF;
+    options.threads = 2;
+    options.bezier_copy = HAIROBB_OFF;
+    CHECK(hairobb_build(st->points, st->count, indices, segments, &options, &off) == HAIROBB_OK, "%s: build, copy off", name);
+    options.bezier_copy = HAIROBB_ON;
+    CHECK(hairobb_build(st->points, st->count, indices, segments, &options, &on) == HAIROBB_OK, "%s: build, copy on", name);
+    if (!off || !on) return;
+    hairobb_get_stats(on, &stats);
+    CHECK(hairobb_memory_bytes(on) == sizeof(hairobb_bvh) + stats.node_bytes + 64 + stats.leaf_bytes + 72 * segments,
+          "%s: memory counts the 72 bytes per segment the copy owns", name);
+    CHECK(hairobb_memory_bytes(off) + 72 * segments == hairobb_memory_bytes(on), "%s: no copy, 72 bytes a segment less", name);
+
+    memset(&framing, 0, sizeof framing);
+    framing.vertices = st->points;
+    framing.vertex_count = st->count;
+    scene_update_bounds(&framing);
+    scene_camera_rays(&framing, SIDE, SIDE, org, dir);
+    CHECK(hit_differences(off, on, org, dir, rays) == 0, "%s%s: copy off and on, the same hits", name, splits ? " splits" : "");
+
+    size_off = hairobb_save_size(off);
+    size_on = hairobb_save_size(on);
+    saved_off = (unsigned char *)malloc(size_off);
+    saved_on = (unsigned char *)malloc(size_on);
+    CHECK(size_off == size_on && hairobb_save(off, saved_off, size_off) == HAIROBB_OK &&
+              hairobb_save(on, saved_on, size_on) == HAIROBB_OK && memcmp(saved_off, saved_on, size_on) == 0,
+          "%s%s: copy off and on save the same bytes (the same tree, the same hair hash)", name, splits ? " splits" : "");
+    for (copy = 0; copy < 2; ++copy) {
+        options.bezier_copy = copy ? HAIROBB_ON : HAIROBB_OFF;
+        CHECK(hairobb_load(copy ? saved_off : saved_on, size_on, st->points, st->count, indices, segments, &options, &loaded) == HAIROBB_OK,
+              "%s: saved with the copy %s, loaded with it %s", name, copy ? "off" : "on", copy ? "on" : "off");
+        if (loaded) CHECK(hit_differences(loaded, on, org, dir, rays) == 0, "%s: loaded, the same hits", name);
+        hairobb_free(loaded);
+        loaded = NULL;
+    }
+    /* other hair: the hash catches it without the copy too */
+    memcpy(moved, st->points, 16 * st->count);
+    moved[4 * (size_t)indices[segments / 2] + 4] += 0.25f;
+    options.bezier_copy = HAIROBB_OFF;
+    CHECK(hairobb_load(saved_on, size_on, moved, st->count, indices, segments, &options, &loaded) == HAIROBB_ERROR_MISMATCH && !loaded,
+          "%s: loaded over moved hair without the copy: mismatch", name);
+
+    /* refit with new arrays; the old ones overwritten after (copy off keeps the new pointers) */
+    for (i = 0; i < st->count; ++i) {
+        moved[4 * i] = st->points[4 * i] + 0.05f * sinf((float)i);
+        moved[4 * i + 1] = st->points[4 * i + 1];
+        moved[4 * i + 2] = st->points[4 * i + 2] * 1.1f;
+        moved[4 * i + 3] = st->points[4 * i + 3] * 0.9f;
+    }
+    if (tangents) {
+        moved_tangents = aligned_floats(4 * st->count);
+        for (i = 0; i < 4 * st->count; ++i) moved_tangents[i] = tangents[i] * 1.05f;
+    }
+    CHECK(hairobb_refit_tangents(off, moved, moved_tangents) == HAIROBB_OK && hairobb_refit_tangents(on, moved, moved_tangents) == HAIROBB_OK,
+          "%s: refits", name);
+    CHECK(hit_differences(off, on, org, dir, rays) == 0, "%s%s: refitted, copy off and on, the same hits", name, splits ? " splits" : "");
+    CHECK(hairobb_save(off, saved_off, size_off) == HAIROBB_OK && hairobb_save(on, saved_on, size_on) == HAIROBB_OK &&
+              memcmp(saved_off, saved_on, size_on) == 0, "%s: refitted, the same saved bytes", name);
+    hairobb_free(off);
+    hairobb_free(on);
+    free(moved);
+    free(moved_tangents);
+    free(saved_off);
+    free(saved_on);
+    free(indices);
+    free(org);
+    free(dir);
+}
+
 /* Converted bases own their segments: the caller's arrays may go. */
 static void test_arrays_freed_after_build(const strands *st)
 {
@@ -214,6 +342,7 @@ static void test_arrays_freed_after_build(const strands *st)
     memcpy(copy, st->points, 16 * st->count);
     memset(&options, 0, sizeof options);
     options.basis = HAIROBB_BASIS_BSPLINE;
+    options.bezier_copy = HAIROBB_ON;
     CHECK(hairobb_build(copy, st->count, indices, segments, &options, &bvh) == HAIROBB_OK, "B-spline build from a copy");
     hit_before = hairobb_intersect1(bvh, &ray, &before);
     memset(copy, 0xff, 16 * st->count);   /* NaNs where the points were */
@@ -270,6 +399,8 @@ int main(void)
     for (basis = HAIROBB_BASIS_BEZIER; basis <= HAIROBB_BASIS_LINEAR; ++basis) {
         if (basis == HAIROBB_BASIS_BEZIER) continue;   /* every other test is Bezier */
         check_basis((hairobb_basis)basis, &st);
+        check_copy((hairobb_basis)basis, &st, 0);
+        check_copy((hairobb_basis)basis, &st, 1);
     }
     test_arrays_freed_after_build(&st);
     test_bad_input(&st);
