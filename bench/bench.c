@@ -160,19 +160,26 @@ typedef struct variant {
     unsigned build_threads; /* hairobb: 0 = every core */
     int hit_filter;      /* hairobb: a hit filter that takes every hit (what a set filter costs) */
     hairobb_simd simd;   /* hairobb: the kernels' path (AUTO: the widest the CPU runs) */
+    /* hairobb: the scene's control points read as Catmull-Rom points (another
+       curve, not the reference's: for memory and speed), with or without the copy */
+    hairobb_basis basis;
+    hairobb_switch bezier_copy;
 } variant;
 
 #define HAIROBB_ROW(key, label, nodes, layout, spatial, cluster, precision, pieces, on_chart) \
     {key, label, LIB_HAIROBB, HAIROBB_NODES_##nodes, HAIROBB_##layout, HAIROBB_PRECISION_##precision, pieces, \
-     HAIROBB_##spatial, HAIROBB_##cluster, 0, 0, 1, on_chart, 0, 0, HAIROBB_SIMD_AUTO}
+     HAIROBB_##spatial, HAIROBB_##cluster, 0, 0, 1, on_chart, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_BEZIER, HAIROBB_AUTO}
 /* the defaults built on one thread (the build's speed-up), with a filter, or
    traced by the SSE2 kernels (what CPUs without AVX2 get) */
 #define HAIROBB_DEFAULTS_ROW(key, label, build_threads, hit_filter, simd) \
     {key, label, LIB_HAIROBB, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 8, HAIROBB_AUTO, HAIROBB_AUTO, \
-     0, 0, 1, 0, build_threads, hit_filter, HAIROBB_SIMD_##simd}
+     0, 0, 1, 0, build_threads, hit_filter, HAIROBB_SIMD_##simd, HAIROBB_BASIS_BEZIER, HAIROBB_AUTO}
 #define EMBREE_ROW(key, label, type, rate, comparable, on_chart) \
     {key, label, LIB_EMBREE, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 0, HAIROBB_AUTO, HAIROBB_AUTO, \
-     type, rate, comparable, on_chart, 0, 0, HAIROBB_SIMD_AUTO}
+     type, rate, comparable, on_chart, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_BEZIER, HAIROBB_AUTO}
+#define HAIROBB_BASIS_ROW(key, label, basis, copy) \
+    {key, label, LIB_HAIROBB, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 8, HAIROBB_AUTO, HAIROBB_AUTO, \
+     0, 0, 0, 0, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_##basis, HAIROBB_##copy}
 static const variant all_variants[] = {
     /* precision points: exact and pieces-only intersectors, 4 to 16 pieces */
     HAIROBB_ROW("default", "hairobb default", MIXED, OBB_DEFAULT, AUTO, AUTO, EXACT, 8, 1),
@@ -194,6 +201,8 @@ static const variant all_variants[] = {
     HAIROBB_DEFAULTS_ROW("build-1t", "hairobb built on 1t", 1, 0, AUTO),
     HAIROBB_DEFAULTS_ROW("filter", "hairobb + hit filter", 0, 1, AUTO),
     HAIROBB_DEFAULTS_ROW("sse2", "hairobb SSE2 path", 0, 0, SSE2),
+    HAIROBB_BASIS_ROW("catmull-rom", "hairobb Catmull-Rom", CATMULL_ROM, OFF),
+    HAIROBB_BASIS_ROW("catmull-rom-copy", "hairobb C-R + copy", CATMULL_ROM, ON),
     EMBREE_ROW("embree-r4", "Embree flat r4", EMB_FLAT_BEZIER, 4, 1, 1),
     EMBREE_ROW("embree-r8", "Embree flat r8", EMB_FLAT_BEZIER, 8, 1, 1),
     EMBREE_ROW("embree-r16", "Embree flat r16", EMB_FLAT_BEZIER, 16, 1, 1),
@@ -220,6 +229,7 @@ static const struct { const char *name, *members; } variant_groups[] = {
     {"precision", "default,exact4,exact16,pieces4,pieces8,pieces16"},
     {"ablation", "aabb,obb,mixed-uncompressed,spatial,spatial-compressed,spatial-compressed-cluster,shared,compressed-shared,default"},
     {"mixed", "default"},
+    {"bases", "default,catmull-rom,catmull-rom-copy"},
 };
 
 static int variant_index(const char *key)
@@ -825,6 +835,8 @@ static hairobb_bvh *build_hairobb(const hair_scene *s, const variant *v, double 
     build_options.spatial_splits = v->spatial_splits;
     build_options.clustering = v->clustering;
     build_options.simd = v->simd;
+    build_options.basis = v->basis;
+    build_options.bezier_copy = v->bezier_copy;
     hairobb_bvh *bvh = NULL;
     alloc_meter_reset_peak(&hairobb_meter);
     size_t live_before = hairobb_meter.current; /* no other thread allocates between builds */
