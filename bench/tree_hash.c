@@ -49,7 +49,7 @@ static void set_leaf1(hairobb_build_options *o) { o->max_leaf_size = 1; }
 static void set_leaf15(hairobb_build_options *o) { o->max_leaf_size = 15; }
 static void set_candidates4(hairobb_build_options *o) { o->hair_space_candidates = 4; }
 static void set_catmull_rom(hairobb_build_options *o) { o->basis = HAIROBB_BASIS_CATMULL_ROM; }
-static void set_catmull_rom_copy(hairobb_build_options *o) { o->basis = HAIROBB_BASIS_CATMULL_ROM; o->bezier_copy = HAIROBB_ON; }
+static void set_catmull_rom_no_copy(hairobb_build_options *o) { o->basis = HAIROBB_BASIS_CATMULL_ROM; o->bezier_copy = HAIROBB_OFF; }
 
 static const option_set option_sets[] = {
     {"default", set_default},
@@ -65,7 +65,7 @@ static const option_set option_sets[] = {
     {"max-leaf-15", set_leaf15},
     {"candidates-4", set_candidates4},
     {"catmull-rom", set_catmull_rom},
-    {"catmull-rom-copy", set_catmull_rom_copy},
+    {"catmull-rom-no-copy", set_catmull_rom_no_copy},
 };
 enum { OPTION_SETS = sizeof option_sets / sizeof option_sets[0] };
 
