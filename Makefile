@@ -22,7 +22,7 @@ B         = build
 X86    := $(filter x86_64% i386% i486% i586% i686% amd64%,$(shell $(CC) -dumpmachine 2>/dev/null))
 QUICK  = $(B)/test_options $(B)/test_conservative $(if $(X86),$(B)/test_simd $(B)/test_simd_w8) $(B)/test_unit \
          $(B)/test_unit_w8 $(B)/test_stress $(B)/test_reference $(B)/test_hair $(B)/test_filter $(B)/test_refit $(B)/test_refit_w4 \
-         $(B)/test_save
+         $(B)/test_save $(B)/test_motion
 CHECK_TESTS = $(QUICK) $(B)/check_test_secondary
 # `make test`: the quick tier's programs and those needing Embree (and furBall_A)
 TESTS = $(QUICK) $(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_scenes $(B)/test_threads $(B)/test_bases
@@ -64,6 +64,10 @@ $(B)/test_refit: tests/test_refit.c hairobb.h tests/reference.h tests/scenes.h t
 	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=8 $< -o $@ $(LIBS)
 $(B)/test_refit_w4: tests/test_refit.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=4 $< -o $@ $(LIBS)
+
+# motion blur: moving fur at random ray times against the reference, errors, refit, save/load
+$(B)/test_motion: tests/test_motion.c hairobb.h tests/reference.h tests/test_data.h tests/check.h | $(B)
+	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS) -lpthread
 
 # black-box: every combination of build options against the reference
 $(B)/test_options: tests/test_options.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)

@@ -25,7 +25,7 @@
      hairobb_result res = hairobb_build(vertices, vertex_count, indices, segment_count,
                                         NULL, &bvh);          // NULL: default options
      if (res != HAIROBB_OK) { puts(hairobb_result_string(res)); return 1; }
-     hairobb_ray ray = { {0,0,-5}, 0.0f, {0,0,1}, INFINITY };
+     hairobb_ray ray = { {0,0,-5}, 0.0f, {0,0,1}, INFINITY, 0.0f };
      hairobb_hit hit;
      if (hairobb_intersect1(bvh, &ray, &hit)) printf("segment %u at t=%g\n", hit.prim_id, hit.t);
      hairobb_free(bvh);
@@ -196,6 +196,29 @@
      verify_hair             hairobb_load only (SAVE AND LOAD): HAIROBB_AUTO
                              (default) and _ON compare the hair with the
                              saved hash, _OFF skips that pass.
+
+   MOTION BLUR
+     options.time_steps = T >= 2 and options.time_vertices (T pointers to
+     arrays of vertex_count control points, the same indices) describe
+     moving hair: step k is the hair at time k / (T - 1). The surface at a
+     ray's time tau (hairobb_ray.time, in [0, 1]) is THE SURFACE of the
+     segment whose control points (position and radius) are interpolated
+     linearly, in float, between the two steps around tau. hairobb_build's
+     `vertices` is then unused (may be NULL); the BVH keeps the T pointers
+     (copied, 8 bytes each: the caller's array of them may go), and the
+     arrays must stay alive as vertices do (MEMORY LIFETIME). Bezier input
+     only (another basis with T >= 2: INVALID_ARGUMENT). Every node bounds
+     its segments at every step (the interpolated control points lie in the
+     hull of the steps'), so one tree serves every time. T = 0 or 1 is a
+     static BVH (time_vertices unused), built and traced exactly as
+     without these fields; static BVHs ignore ray.time.
+     Errors: time_vertices NULL or a NULL step: INVALID_ARGUMENT; NaN,
+     Inf, huge or negative radius at any step: INVALID_GEOMETRY. A ray of
+     a motion-blurred BVH whose time is outside [0, 1] or NaN misses
+     (intersect and occluded return 0). hairobb_refit_motion refits with
+     new arrays for every step; save and load keep T (the load takes
+     options.time_steps and time_vertices, and the hash covers every step;
+     another T is HAIROBB_ERROR_MISMATCH).
 
    HITS
      hairobb_hit: t, u, v as above; Ng the ribbon's unit normal facing the ray
@@ -438,6 +461,10 @@ typedef struct hairobb_build_options {
     void *parallel_for_user;
     hairobb_switch verify_hair;      /* hairobb_load: AUTO/ON compare the hair with the saved hash, OFF skip it */
     hairobb_switch bezier_copy;      /* bases other than Bezier: AUTO/ON convert a copy, OFF read the caller's arrays */
+    /* Motion blur (MOTION BLUR): time_steps >= 2 arrays of vertex_count control
+       points each, the hair at times k / (time_steps - 1); 0 or 1: static */
+    unsigned time_steps;
+    const float *const *time_vertices;
 } hairobb_build_options;
 
 typedef struct hairobb_bvh hairobb_bvh;
@@ -462,6 +489,13 @@ HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh);
    another thread traces the BVH. */
 HAIROBB_DEF hairobb_result hairobb_refit(hairobb_bvh *bvh, const float *vertices);
 HAIROBB_DEF hairobb_result hairobb_refit_tangents(hairobb_bvh *bvh, const float *vertices, const float *tangents);
+/* Refit of a motion-blurred BVH (MOTION BLUR): new arrays for each of its
+   time_steps (time_vertices[k], vertex_count control points each; the BVH
+   keeps these pointers, not the array of them). A static BVH, a NULL
+   array or step: INVALID_ARGUMENT; bad vertices at any step:
+   INVALID_GEOMETRY, the BVH left as it was. hairobb_refit of a
+   motion-blurred BVH is INVALID_ARGUMENT. */
+HAIROBB_DEF hairobb_result hairobb_refit_motion(hairobb_bvh *bvh, const float *const *time_vertices);
 
 /* Every byte the BVH allocated (the caller's arrays are not counted). */
 HAIROBB_DEF size_t hairobb_memory_bytes(const hairobb_bvh *bvh);
@@ -520,6 +554,7 @@ HAIROBB_DEF hairobb_result hairobb_load_file(const char *path,
 typedef struct hairobb_ray {
     float org[3]; float tnear;
     float dir[3]; float tfar;   /* dir need not be normalised; t is in units of |dir| */
+    float time;                 /* in [0, 1], read by motion-blurred BVHs only (MOTION BLUR) */
 } hairobb_ray;
 
 #define HAIROBB_INVALID_ID 0xffffffffu
@@ -927,19 +962,51 @@ struct hairobb_bvh {
        copy in curves), or the caller's arrays in basis, with tangents */
     hairobb_basis point_basis;
     const float *tangents;
+    /* motion blur: time_steps >= 2 arrays (vertices = time_vertices[0]),
+       the pointers owned; 0 for a static BVH */
+    unsigned time_steps;
+    const float **time_vertices;
+    int points_in_place;              /* static Bezier points (input or copy): read where they are */
 };
 
 static void hairobb__to_bezier(hairobb_basis basis, const float *p, const float *t, float b[16]);
 
-/* The Bezier control points (x y z r, 4 each) of segment prim as traced:
-   every traversal path reads a segment through here. scratch: room for
-   points made on the fly (other bases read without the copy). */
-HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uint32_t prim, float scratch[16])
+/* Control points of segment prim made on the fly, into scratch: at time
+   (in [0, 1]) for a motion-blurred BVH, each float lerped between the two
+   steps around it; converted from the caller's basis without the copy.
+   Out of line and compiled once, so every SIMD path makes them alike. */
+static const float *hairobb__made_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
+#if defined(__GNUC__) || defined(__clang__)
+    __attribute__((noinline))
+#endif
+    ;
+static const float *hairobb__made_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
 {
     size_t at = 4 * (size_t)bvh->indices[prim];
-    if (bvh->point_basis == HAIROBB_BASIS_BEZIER) return bvh->vertices + at;
+    if (bvh->time_steps) {
+        float f = time * (float)(bvh->time_steps - 1), w;
+        unsigned k = (unsigned)f;
+        const float *a, *b;
+        int j;
+        if (k > bvh->time_steps - 2) k = bvh->time_steps - 2;
+        w = f - (float)k;
+        a = bvh->time_vertices[k] + at;
+        b = bvh->time_vertices[k + 1] + at;
+        for (j = 0; j < 16; ++j) scratch[j] = (1.0f - w) * a[j] + w * b[j];
+        return scratch;
+    }
     hairobb__to_bezier(bvh->point_basis, bvh->vertices + at, bvh->tangents ? bvh->tangents + at : NULL, scratch);
     return scratch;
+}
+
+/* The Bezier control points (x y z r, 4 each) of segment prim as traced
+   at time (a ray's; unused by static BVHs): every traversal path reads a
+   segment through here, with one predictable branch. scratch: room for
+   points made on the fly. */
+HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
+{
+    if (bvh->points_in_place) return bvh->vertices + 4 * (size_t)bvh->indices[prim];
+    return hairobb__made_points(bvh, prim, time, scratch);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -1033,6 +1100,37 @@ static hairobb_result hairobb__validate(const float *vertices, size_t vertex_cou
         if (bad) return HAIROBB_ERROR_INVALID_GEOMETRY;
     }
     return HAIROBB_OK;
+}
+
+/* Motion blur's input (hairobb_build and hairobb_load): *steps = 0 for a
+   static BVH (time_steps 0 or 1), else every step validated as vertices
+   are, and *vertices = the first step. */
+static hairobb_result hairobb__validate_motion(const hairobb_build_options *opt, size_t vertex_count, const uint32_t *indices,
+                                               size_t segment_count, const float **vertices, unsigned *steps)
+{
+    unsigned k;
+    *steps = 0;
+    if (opt->time_steps < 2) return HAIROBB_OK;
+    if (!opt->time_vertices || opt->basis != HAIROBB_BASIS_BEZIER || opt->time_steps > 0xffffu) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    for (k = 0; k < opt->time_steps; ++k)
+        if (!opt->time_vertices[k]) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    for (k = 0; k < opt->time_steps; ++k) {
+        hairobb_result result = hairobb__validate(opt->time_vertices[k], vertex_count, indices, segment_count, 4, NULL);
+        if (result != HAIROBB_OK) return result;
+    }
+    *vertices = opt->time_vertices[0];
+    *steps = opt->time_steps;
+    return HAIROBB_OK;
+}
+
+/* A copy of the steps' pointers (the BVH's, freed with it); NULL when out of memory. */
+static const float **hairobb__copy_steps(const float *const *time_vertices, unsigned steps, void *user)
+{
+    const float **copy = HAIROBB__CAST(const float **, HAIROBB_MALLOC(steps * sizeof *copy, user));
+    unsigned k;
+    if (copy)
+        for (k = 0; k < steps; ++k) copy[k] = time_vertices[k];
+    return copy;
 }
 
 /* The Bezier control points (x, y, z, r each) of a segment given in another
@@ -1257,14 +1355,6 @@ HAIROBB__INLINE void hairobb__segment_box_prep(const float *cp, const hairobb__f
     hairobb__segment_box_v4(cp, f, centre, row_norms, &lo, &hi);
     hairobb__b4_store3(lower, lo);
     hairobb__b4_store3(upper, hi);
-}
-
-static void hairobb__segment_box(const float *cp, const float frame[9], const float *centre, const float *row_norms,
-                                 float lower[3], float upper[3])
-{
-    hairobb__frame_prep f;
-    hairobb__prepare_frame(frame, &f);
-    hairobb__segment_box_prep(cp, &f, centre, row_norms, lower, upper);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -1554,6 +1644,8 @@ typedef struct hairobb__builder {
     const uint32_t *indices;
     hairobb_basis basis;              /* of vertices and indices (Bezier, or read without the copy) */
     const float *tangents;
+    unsigned time_steps;              /* motion blur: >= 2 steps (vertices = the first), else 0 */
+    const float *const *time_vertices;
     uint32_t *ids;                    /* segment of each position */
     float *ranges;                    /* u0, u1 per position; NULL without spatial splits: all [0, 1] */
     float *world_boxes;               /* 6 per position: lower, upper */
@@ -1620,23 +1712,25 @@ static const float *hairobb__clipped_points(const float *cp, double u0, double u
     return scratch;
 }
 
-/* The Bezier control points of segment id as the builder reads it. */
-HAIROBB__INLINE const float *hairobb__builder_points(const hairobb__builder *b, uint32_t id, float scratch[16])
+/* The Bezier control points of segment id as the builder reads it from
+   vertices (b->vertices, or a motion step's). */
+HAIROBB__INLINE const float *hairobb__builder_points(const hairobb__builder *b, const float *vertices, uint32_t id,
+                                                     float scratch[16])
 {
     size_t at = 4 * (size_t)b->indices[id];
-    if (b->basis == HAIROBB_BASIS_BEZIER) return b->vertices + at;
-    hairobb__to_bezier(b->basis, b->vertices + at, b->tangents ? b->tangents + at : NULL, scratch);
+    if (b->basis == HAIROBB_BASIS_BEZIER) return vertices + at;
+    hairobb__to_bezier(b->basis, vertices + at, b->tangents ? b->tangents + at : NULL, scratch);
     return scratch;
 }
 
 /* Control points of the reference at position i: the caller's, or its
    clipped part's. Inline: most references are whole segments, and every
    box pass asks. */
-HAIROBB__INLINE const float *hairobb__ref_points(const hairobb__builder *b, size_t i, float scratch[16])
+HAIROBB__INLINE const float *hairobb__ref_points_in(const hairobb__builder *b, const float *vertices, size_t i, float scratch[16])
 {
     static const float whole[2] = {0.0f, 1.0f};
     float converted[16];
-    const float *cp = hairobb__builder_points(b, b->ids[i], converted);
+    const float *cp = hairobb__builder_points(b, vertices, b->ids[i], converted);
     /* the bits of [0, 1]: u0 is +0 or above (set_range's 0, or a clip strictly inside);
        no ranges (a refit of a tree without clipped references): all whole */
     if (!b->ranges || memcmp(b->ranges + 2 * i, whole, sizeof whole) == 0) {
@@ -1646,6 +1740,49 @@ HAIROBB__INLINE const float *hairobb__ref_points(const hairobb__builder *b, size
     return hairobb__clipped_points(cp, b->ranges[2 * i], b->ranges[2 * i + 1], scratch);
 }
 
+HAIROBB__INLINE const float *hairobb__ref_points(const hairobb__builder *b, size_t i, float scratch[16])
+{
+    return hairobb__ref_points_in(b, b->vertices, i, scratch);
+}
+
+/* The other steps of a moving reference grown into its box (of step 0):
+   the control points lerped at any time lie in the hull of the two steps'
+   (a clipped part's too: clipping is linear in the points) and a lerped
+   radius is at most the larger, so the union of the steps' boxes bounds
+   the ribbon at every time. */
+static void hairobb__ref_box_steps(const hairobb__builder *b, size_t i, const hairobb__frame_prep *f, const float *centre,
+                                   const float *row_norms, hairobb__b4 *lower, hairobb__b4 *upper)
+{
+    unsigned step;
+    for (step = 1; step < b->time_steps; ++step) {
+        float scratch[16];
+        hairobb__b4 lo, hi;
+        hairobb__segment_box_v4(hairobb__ref_points_in(b, b->time_vertices[step], i, scratch), f, centre, row_norms, &lo, &hi);
+        *lower = hairobb__b4_min(*lower, lo);
+        *upper = hairobb__b4_max(*upper, hi);
+    }
+}
+
+/* Box of the reference at position i in frame f (hairobb__segment_box_v4's
+   arguments), over every time step of moving hair: every box the builder
+   and the refit compute comes from here. */
+HAIROBB__INLINE void hairobb__ref_box_v4(const hairobb__builder *b, size_t i, const hairobb__frame_prep *f, const float *centre,
+                                         const float *row_norms, hairobb__b4 *lower, hairobb__b4 *upper)
+{
+    float scratch[16];
+    hairobb__segment_box_v4(hairobb__ref_points(b, i, scratch), f, centre, row_norms, lower, upper);
+    if (b->time_steps) hairobb__ref_box_steps(b, i, f, centre, row_norms, lower, upper);
+}
+
+HAIROBB__INLINE void hairobb__ref_box(const hairobb__builder *b, size_t i, const hairobb__frame_prep *f, const float *centre,
+                                      const float *row_norms, float lower[3], float upper[3])
+{
+    hairobb__b4 lo, hi;
+    hairobb__ref_box_v4(b, i, f, centre, row_norms, &lo, &hi);
+    hairobb__b4_store3(lower, lo);
+    hairobb__b4_store3(upper, hi);
+}
+
 static void hairobb__prim_box(const hairobb__builder *b, size_t i, const hairobb__frame_prep *frame,
                               float lower[3], float upper[3])
 {
@@ -1653,8 +1790,7 @@ static void hairobb__prim_box(const hairobb__builder *b, size_t i, const hairobb
         memcpy(lower, b->world_boxes + 6 * i, 3 * sizeof(float));
         memcpy(upper, b->world_boxes + 6 * i + 3, 3 * sizeof(float));
     } else {
-        float scratch[16];
-        hairobb__segment_box_prep(hairobb__ref_points(b, i, scratch), frame, NULL, NULL, lower, upper);
+        hairobb__ref_box(b, i, frame, NULL, NULL, lower, upper);
     }
 }
 
@@ -1929,8 +2065,7 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
     for (i = r->begin; i < r->end; ++i) {
         hairobb__b4 lower, upper, c;
         if (frame) {
-            float scratch[16];
-            hairobb__segment_box_v4(hairobb__ref_points(b, i, scratch), &prep, NULL, NULL, &lower, &upper);
+            hairobb__ref_box_v4(b, i, &prep, NULL, NULL, &lower, &upper);
             hairobb__b4_store3(boxes + 6 * (i - r->begin), lower);
             hairobb__b4_store3(boxes + 6 * (i - r->begin) + 3, upper);
         } else {
@@ -2120,9 +2255,8 @@ static void hairobb__node_box(const hairobb__builder *b, const hairobb__range *r
     for (k = 0; k < 3; ++k)     /* rounded up: the radius must not shrink */
         norms[k] = sqrtf(hairobb__dot3(frame + 3 * k, frame + 3 * k)) * (1.0f + 1.0f / 1048576.0f);
     for (i = r->begin; i < r->end; ++i) {
-        float scratch[16];
         hairobb__b4 lo, hi;
-        hairobb__segment_box_v4(hairobb__ref_points(b, i, scratch), &prep, centre, norms, &lo, &hi);
+        hairobb__ref_box_v4(b, i, &prep, centre, norms, &lo, &hi);
         box_lower = hairobb__b4_min(box_lower, lo);
         box_upper = hairobb__b4_max(box_upper, hi);
     }
@@ -2241,13 +2375,15 @@ HAIROBB__INLINE void hairobb__swap_positions(hairobb__builder *b, size_t i, size
 
 static void hairobb__set_range(hairobb__builder *b, size_t i, float u0, float u1)
 {
-    float scratch[16], identity[9];
+    float identity[9];
+    hairobb__frame_prep prep;
     if (b->ranges) {
         b->ranges[2 * i] = u0;
         b->ranges[2 * i + 1] = u1;
     }
     hairobb__identity_frame(identity);
-    hairobb__segment_box(hairobb__ref_points(b, i, scratch), identity, NULL, NULL, b->world_boxes + 6 * i, b->world_boxes + 6 * i + 3);
+    hairobb__prepare_frame(identity, &prep);
+    hairobb__ref_box(b, i, &prep, NULL, NULL, b->world_boxes + 6 * i, b->world_boxes + 6 * i + 3);
 }
 
 /* Side of a reference for split: 0 left, 1 right, 2 straddling a spatial
@@ -2273,7 +2409,7 @@ static int hairobb__clip(hairobb__builder *b, size_t i, size_t extra, const hair
 {
     float frame_row[3] = {0.0f, 0.0f, 0.0f}, plane, u0 = b->ranges[2 * i], u1 = b->ranges[2 * i + 1];
     float lo = u0, hi = u1, c0, c1, uc, converted[16];
-    const float *cp = hairobb__builder_points(b, b->ids[i], converted);
+    const float *cp = hairobb__builder_points(b, b->vertices, b->ids[i], converted);
     int iteration, k;
     if (split->hair_space) memcpy(frame_row, split->frame + 3 * split->axis, sizeof frame_row);
     else frame_row[split->axis] = 1.0f;
@@ -3101,10 +3237,11 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     hairobb_result result;
     hairobb_simd simd;
     size_t i, extra;
+    unsigned steps;
 
     if (out) *out = NULL;
-    if (!out || !vertices || !indices || segment_count == 0) return HAIROBB_ERROR_INVALID_ARGUMENT;
     if (options) opt = *options; else memset(&opt, 0, sizeof opt);
+    if (!out || (!vertices && opt.time_steps < 2) || !indices || segment_count == 0) return HAIROBB_ERROR_INVALID_ARGUMENT;
     if (opt.max_leaf_size == 0) opt.max_leaf_size = 4;
     if (opt.hair_space_candidates == 0) opt.hair_space_candidates = 2;
     if (opt.curve_pieces == 0) opt.curve_pieces = 8;
@@ -3124,7 +3261,11 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     if (opt.spatial_split_budget == 0.0f) opt.spatial_split_budget = 0.25f;
     result = hairobb__choose_simd(opt.simd, &simd);
     if (result != HAIROBB_OK) return result;
-    result = hairobb__validate(vertices, vertex_count, indices, segment_count, hairobb__basis_points(opt.basis), opt.tangents);
+    if (opt.time_steps < 2) {
+        result = hairobb__validate(vertices, vertex_count, indices, segment_count, hairobb__basis_points(opt.basis), opt.tangents);
+        if (result != HAIROBB_OK) return result;
+    }
+    result = hairobb__validate_motion(&opt, vertex_count, indices, segment_count, &vertices, &steps);
     if (result != HAIROBB_OK) return result;
 
     extra = opt.spatial_splits == HAIROBB_ON ? (size_t)((double)segment_count * opt.spatial_split_budget) : 0;
@@ -3134,6 +3275,8 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     memset(&b, 0, sizeof b);
     b.vertices = vertices;
     b.indices = indices;
+    b.time_steps = steps;
+    b.time_vertices = opt.time_vertices;
     b.user = opt.allocator_user;
     b.policy = opt.nodes;
     b.obb_layout = opt.obb_layout;
@@ -3166,6 +3309,10 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     if (!bvh || !b.ids || (opt.spatial_splits == HAIROBB_ON && !b.ranges) || !b.world_boxes ||
         (b.frame_capacity && !b.frame_boxes))
         goto failed;
+    if (steps) {
+        bvh->time_vertices = hairobb__copy_steps(opt.time_vertices, steps, b.user);
+        if (!bvh->time_vertices) goto failed;
+    }
     bvh->vertex_count = vertex_count;
     bvh->source_indices = indices;
     if (opt.basis != HAIROBB_BASIS_BEZIER && opt.bezier_copy != HAIROBB_OFF) {
@@ -3241,6 +3388,8 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     bvh->obb_layout = opt.obb_layout;
     bvh->max_leaf_size = opt.max_leaf_size;
     bvh->simd = simd;
+    bvh->time_steps = steps;
+    bvh->points_in_place = bvh->point_basis == HAIROBB_BASIS_BEZIER && !steps;
     hairobb__setup_pieces(bvh, (int)opt.curve_pieces);
     bvh->stats = b.stats;
     bvh->stats.node_bytes = bvh->node_bytes;
@@ -3250,6 +3399,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
 
 failed:
     if (bvh && bvh->curves) HAIROBB_FREE(bvh->curves, b.user);
+    if (bvh && bvh->time_vertices) HAIROBB_FREE(HAIROBB__CAST(void *, bvh->time_vertices), b.user);
     if (bvh && bvh->node_allocation) HAIROBB_FREE(bvh->node_allocation, b.user);
     if (b.node_allocation) HAIROBB_FREE(b.node_allocation, b.user);
     if (b.ids) HAIROBB_FREE(b.ids, b.user);
@@ -3269,6 +3419,7 @@ HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh)
     if (!bvh) return;
     user = bvh->allocator_user;
     if (bvh->curves) HAIROBB_FREE(bvh->curves, user);
+    if (bvh->time_vertices) HAIROBB_FREE(HAIROBB__CAST(void *, bvh->time_vertices), user);
     if (bvh->node_allocation) HAIROBB_FREE(bvh->node_allocation, user);
     if (bvh->leaf_prims) HAIROBB_FREE(bvh->leaf_prims, user);
     if (bvh->leaf_ranges) HAIROBB_FREE(bvh->leaf_ranges, user);
@@ -3279,7 +3430,7 @@ HAIROBB_DEF size_t hairobb_memory_bytes(const hairobb_bvh *bvh)
 {
     if (!bvh) return 0;
     return sizeof *bvh + (bvh->node_allocation ? bvh->node_bytes + 64 : 0) + hairobb__leaf_bytes(bvh) +
-           (bvh->curves ? hairobb__curve_bytes(bvh->segment_count) : 0);
+           (bvh->curves ? hairobb__curve_bytes(bvh->segment_count) : 0) + bvh->time_steps * sizeof *bvh->time_vertices;
 }
 
 HAIROBB_DEF void hairobb_get_stats(const hairobb_bvh *bvh, hairobb_stats *stats)
@@ -3453,12 +3604,10 @@ static size_t hairobb__refit_subtree(const hairobb__refit *f, uint64_t ref, size
         size_t end = first + (size_t)((ref >> 4) & 15u), k;
         HAIROBB_ASSERT((size_t)(ref >> 8) == first);
         for (k = first; k < end; ++k) {
-            float scratch[16];
-            const float *cp = hairobb__ref_points(&f->b, k, scratch);
             hairobb__refit_box part;
             /* as hairobb__set_range and hairobb__node_box compute them */
-            hairobb__segment_box_prep(cp, &f->world, NULL, NULL, part.world, part.world + 3);
-            hairobb__segment_box_prep(cp, &f->world, NULL, f->axis_norms, part.axis, part.axis + 3);
+            hairobb__ref_box(&f->b, k, &f->world, NULL, NULL, part.world, part.world + 3);
+            hairobb__ref_box(&f->b, k, &f->world, NULL, f->axis_norms, part.axis, part.axis + 3);
             hairobb__refit_box_grow(box, &part);
         }
         return end;
@@ -3545,6 +3694,8 @@ static void hairobb__refit_tree(hairobb_bvh *bvh)
     f.b.indices = bvh->indices;
     f.b.basis = bvh->point_basis;
     f.b.tangents = bvh->tangents;
+    f.b.time_steps = bvh->time_steps;
+    f.b.time_vertices = bvh->time_vertices;
     f.b.ids = bvh->leaf_prims;
     f.b.ranges = bvh->leaf_ranges;
     f.b.user = bvh->allocator_user;
@@ -3584,9 +3735,15 @@ static void hairobb__refit_tree(hairobb_bvh *bvh)
         /* the bounds are the whole segments', not their clipped parts' */
         hairobb__box_empty(lower, upper);
         for (k = 0; k < bvh->segment_count; ++k) {
-            float lo[3], hi[3], scratch[16];
-            hairobb__segment_box_prep(hairobb__segment_points(bvh, (uint32_t)k, scratch), &f.world, NULL, NULL, lo, hi);
-            hairobb__box_grow(lower, upper, lo, hi);
+            unsigned step;
+            for (step = 0; step < (bvh->time_steps ? bvh->time_steps : 1u); ++step) {   /* every step's */
+                float lo[3], hi[3], scratch[16];
+                /* motion blur is Bezier input: its steps are read in place */
+                const float *cp = bvh->time_steps ? bvh->time_vertices[step] + 4 * (size_t)bvh->indices[k]
+                                                  : hairobb__segment_points(bvh, (uint32_t)k, 0.0f, scratch);
+                hairobb__segment_box_prep(cp, &f.world, NULL, NULL, lo, hi);
+                hairobb__box_grow(lower, upper, lo, hi);
+            }
         }
     }
     hairobb__pad_box(lower, upper);
@@ -3598,7 +3755,8 @@ HAIROBB_DEF hairobb_result hairobb_refit_tangents(hairobb_bvh *bvh, const float 
 {
     const uint32_t *indices;
     hairobb_result result;
-    if (!bvh || !vertices || (bvh->basis == HAIROBB_BASIS_HERMITE) != (tangents != NULL)) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    if (!bvh || !vertices || (bvh->basis == HAIROBB_BASIS_HERMITE) != (tangents != NULL) || bvh->time_steps)
+        return HAIROBB_ERROR_INVALID_ARGUMENT;
     indices = bvh->source_indices;
     /* all checked before anything is written: on an error the BVH traces the old positions */
     result = hairobb__validate(vertices, bvh->vertex_count, indices, bvh->segment_count, hairobb__basis_points(bvh->basis), tangents);
@@ -3615,6 +3773,25 @@ HAIROBB_DEF hairobb_result hairobb_refit_tangents(hairobb_bvh *bvh, const float 
 HAIROBB_DEF hairobb_result hairobb_refit(hairobb_bvh *bvh, const float *vertices)
 {
     return hairobb_refit_tangents(bvh, vertices, NULL);
+}
+
+HAIROBB_DEF hairobb_result hairobb_refit_motion(hairobb_bvh *bvh, const float *const *time_vertices)
+{
+    hairobb_build_options opt;
+    hairobb_result result;
+    const float *vertices = NULL;
+    unsigned steps, k;
+    if (!bvh || !bvh->time_steps || !time_vertices) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    memset(&opt, 0, sizeof opt);
+    opt.time_steps = bvh->time_steps;
+    opt.time_vertices = time_vertices;
+    /* all checked before anything is written: on an error the BVH traces the old positions */
+    result = hairobb__validate_motion(&opt, bvh->vertex_count, bvh->indices, bvh->segment_count, &vertices, &steps);
+    if (result != HAIROBB_OK) return result;
+    for (k = 0; k < steps; ++k) bvh->time_vertices[k] = time_vertices[k];
+    bvh->vertices = vertices;
+    hairobb__refit_tree(bvh);
+    return HAIROBB_OK;
 }
 
 /* ------------------------------------------------------------------------ */
@@ -3651,7 +3828,8 @@ HAIROBB_DEF hairobb_result hairobb_refit(hairobb_bvh *bvh, const float *vertices
 #define HAIROBB__AT_ROOT 72
 #define HAIROBB__AT_NODE_BYTES 80
 #define HAIROBB__AT_LEAF_PRIMS 88
-#define HAIROBB__AT_BOUNDS 96           /* ... float lower[3], upper[3]; 120..127 zero */
+#define HAIROBB__AT_BOUNDS 96           /* ... float lower[3], upper[3] */
+#define HAIROBB__AT_TIME_STEPS 120      /* uint32: motion blur's steps, 0 static; 124..127 zero */
 static const unsigned char hairobb__save_magic[8] = {'H', 'A', 'I', 'R', 'O', 'B', 'B', 0x1a};
 
 /* A 64-bit hash of 8-byte words: each step (xor the word, multiply by an
@@ -3711,23 +3889,29 @@ static uint64_t hairobb__hair_hash(const float *vertices, size_t vertex_count, c
     return hairobb__hash(h, indices, sizeof(uint32_t) * segment_count);
 }
 
-/* hairobb__hair_hash of the Bezier segments a BVH traces. Without the copy
-   each segment is converted as it is hashed: the same bytes hairobb__hash
-   reads from the copy (two of its 32-byte blocks a segment, then the
-   indices 4 i), so a BVH saved with the copy loads without it and back. */
+/* hairobb__hair_hash of the Bezier segments a BVH traces, and for motion
+   blur (Bezier input) every step's array after the first's. Without the
+   copy each segment is converted as it is hashed: the same bytes
+   hairobb__hash reads from the copy (two of its 32-byte blocks a segment,
+   then the indices 4 i), so a BVH saved with the copy loads without it and
+   back. */
 static uint64_t hairobb__traced_hash(const hairobb_bvh *bvh)
 {
     size_t n = bvh->segment_count, i;
     uint64_t lane[4], word[4], h;
     uint32_t ix[8];
     int k, j;
-    if (bvh->point_basis == HAIROBB_BASIS_BEZIER)
-        return hairobb__hair_hash(bvh->vertices, hairobb__traced_vertex_count(bvh), bvh->indices, n);
+    if (bvh->point_basis == HAIROBB_BASIS_BEZIER) {
+        size_t vertex_count = hairobb__traced_vertex_count(bvh);
+        h = hairobb__hair_hash(bvh->vertices, vertex_count, bvh->indices, n);
+        for (k = 1; k < (int)bvh->time_steps; ++k) h = hairobb__hash(h, bvh->time_vertices[k], 4 * sizeof(float) * vertex_count);
+        return h;
+    }
     h = hairobb__hash_word(hairobb__hash_word(UINT64_C(0x6f6262), (uint64_t)(4 * n)), (uint64_t)n);
     for (k = 0; k < 4; ++k) lane[k] = h + (uint64_t)k;
     for (i = 0; i < n; ++i) {
         float scratch[16];
-        const float *cp = hairobb__segment_points(bvh, (uint32_t)i, scratch);
+        const float *cp = hairobb__segment_points(bvh, (uint32_t)i, 0.0f, scratch);
         for (j = 0; j < 2; ++j) {
             memcpy(word, cp + 8 * j, 32);
             for (k = 0; k < 4; ++k) lane[k] = hairobb__hash_word(lane[k], word[k]);
@@ -3792,6 +3976,7 @@ HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, si
     hairobb__put64(out + HAIROBB__AT_SEGMENTS, bvh->segment_count);
     hairobb__put64(out + HAIROBB__AT_VERTICES, hairobb__traced_vertex_count(bvh));
     hairobb__put64(out + HAIROBB__AT_HAIR_HASH, hairobb__traced_hash(bvh));
+    hairobb__put32(out + HAIROBB__AT_TIME_STEPS, bvh->time_steps);
     hairobb__put64(out + HAIROBB__AT_ROOT, bvh->root);
     hairobb__put64(out + HAIROBB__AT_NODE_BYTES, bvh->node_bytes);
     hairobb__put64(out + HAIROBB__AT_LEAF_PRIMS, bvh->leaf_prim_count);
@@ -3894,14 +4079,15 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
     hairobb_simd simd;
     hairobb_bvh *bvh;
     uint64_t node_bytes, leaf_prim_count, saved_segments;
-    uint32_t basis, precision, pieces, layout, max_leaf, policy, flags;
+    uint32_t basis, precision, pieces, layout, max_leaf, policy, flags, saved_steps;
     size_t leaf_bytes, range_bytes, i;
+    unsigned steps;
     void *user;
     int k;
 
     if (out) *out = NULL;
-    if (!out || !in || !vertices || !indices || segment_count == 0) return HAIROBB_ERROR_INVALID_ARGUMENT;
     if (options) opt = *options; else memset(&opt, 0, sizeof opt);
+    if (!out || !in || (!vertices && opt.time_steps < 2) || !indices || segment_count == 0) return HAIROBB_ERROR_INVALID_ARGUMENT;
     if ((unsigned)opt.basis > HAIROBB_BASIS_LINEAR || (opt.basis == HAIROBB_BASIS_HERMITE) != (opt.tangents != NULL) ||
         (unsigned)opt.simd > HAIROBB_SIMD_AVX2 || (unsigned)opt.verify_hair > HAIROBB_OFF || opt.threads > 256)
         return HAIROBB_ERROR_INVALID_ARGUMENT;
@@ -3934,7 +4120,7 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
     saved_segments = hairobb__get64(in + HAIROBB__AT_SEGMENTS);
     if (basis > HAIROBB_BASIS_LINEAR || precision > HAIROBB_PRECISION_PIECES || pieces < 1 || pieces > HAIROBB__MAX_PIECES ||
         layout < HAIROBB_OBB_PER_CHILD || layout > HAIROBB_OBB_COMPRESSED_PER_CHILD || max_leaf < 1 || max_leaf > HAIROBB__MAX_LEAF ||
-        policy > HAIROBB_NODES_OBB_ONLY || hairobb__get64(in + 120) != 0 ||
+        policy > HAIROBB_NODES_OBB_ONLY || hairobb__get32(in + 124) != 0 ||
         saved_segments == 0 || leaf_prim_count == 0 || node_bytes % 16 != 0)
         return HAIROBB_ERROR_INVALID_FILE;
     for (i = HAIROBB__SAVE_HEADER + (size_t)node_bytes + sizeof(uint32_t) * (size_t)leaf_prim_count;
@@ -3946,8 +4132,16 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
         memcpy(&hi, in + HAIROBB__AT_BOUNDS + 12 + 4 * k, sizeof hi);
         if (!(lo <= hi) || !(fabsf(lo) <= FLT_MAX) || !(fabsf(hi) <= FLT_MAX)) return HAIROBB_ERROR_INVALID_FILE;
     }
-    if (basis != (uint32_t)opt.basis || saved_segments != (uint64_t)segment_count) return HAIROBB_ERROR_MISMATCH;
-    result = hairobb__validate(vertices, vertex_count, indices, segment_count, hairobb__basis_points(opt.basis), opt.tangents);
+    saved_steps = hairobb__get32(in + HAIROBB__AT_TIME_STEPS);
+    if (saved_steps == 1 || saved_steps > 0xffffu || (saved_steps && basis != HAIROBB_BASIS_BEZIER)) return HAIROBB_ERROR_INVALID_FILE;
+    if (basis != (uint32_t)opt.basis || saved_segments != (uint64_t)segment_count ||
+        saved_steps != (opt.time_steps < 2 ? 0u : opt.time_steps))
+        return HAIROBB_ERROR_MISMATCH;
+    if (opt.time_steps < 2) {
+        result = hairobb__validate(vertices, vertex_count, indices, segment_count, hairobb__basis_points(opt.basis), opt.tangents);
+        if (result != HAIROBB_OK) return result;
+    }
+    result = hairobb__validate_motion(&opt, vertex_count, indices, segment_count, &vertices, &steps);
     if (result != HAIROBB_OK) return result;
 
     bvh = HAIROBB__CAST(hairobb_bvh *, HAIROBB_MALLOC(sizeof *bvh, user));
@@ -3961,6 +4155,11 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
     result = HAIROBB_ERROR_OUT_OF_MEMORY;
     bvh->source_indices = indices;
     bvh->basis = opt.basis;
+    if (steps) {
+        bvh->time_vertices = hairobb__copy_steps(opt.time_vertices, steps, user);
+        if (!bvh->time_vertices) goto failed;
+        bvh->time_steps = steps;
+    }
     if (opt.basis != HAIROBB_BASIS_BEZIER && opt.bezier_copy != HAIROBB_OFF) {
         float *curves = hairobb__convert_curves(opt.basis, vertices, indices, opt.tangents, segment_count, user);
         if (!curves) goto failed;
@@ -3972,6 +4171,7 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
         bvh->point_basis = opt.basis;
         bvh->tangents = opt.tangents;
     }
+    bvh->points_in_place = bvh->point_basis == HAIROBB_BASIS_BEZIER && !bvh->time_steps;
     bvh->segment_count = segment_count;
     if (opt.verify_hair != HAIROBB_OFF &&
         (hairobb__get64(in + HAIROBB__AT_VERTICES) != (uint64_t)hairobb__traced_vertex_count(bvh) ||
@@ -4144,6 +4344,7 @@ typedef struct hairobb__ray_state {
     const hairobb_ray *ray;     /* the caller's */
     float org[3], dir[3];
     float tnear, tfar;          /* tfar shrinks to the nearest hit so far */
+    float time;                 /* the ray's, for motion-blurred BVHs */
     hairobb__slab_ray world;    /* for AABB nodes */
     float frame[9];             /* rows x, y, z of ray space; z = dir/|dir| */
     float dir_length, inv_dir_length;
@@ -4208,11 +4409,13 @@ static int hairobb__ray_setup(hairobb__ray_state *rs, const hairobb_bvh *bvh, co
     hairobb__slab_setup(&rs->world, ray->org, ray->dir);
     rs->tnear = ray->tnear;
     rs->tfar = ray->tfar;
+    rs->time = ray->time;
     rs->hit_prim = HAIROBB_INVALID_ID;
     rs->hit_u = 0.0f;
     rs->skip_t = 0.0f;
     rs->dir_length = sqrtf(hairobb__dot3(ray->dir, ray->dir));
     if (!(rs->dir_length > 0.0f) || !(rs->dir_length < INFINITY) || !(rs->tnear <= rs->tfar)) return 0;
+    if (bvh->time_steps && !(rs->time >= 0.0f && rs->time <= 1.0f)) return 0;   /* NaN too */
     rs->inv_dir_length = 1.0f / rs->dir_length;
     for (k = 0; k < 3; ++k) unit[k] = ray->dir[k] * rs->inv_dir_length;
     hairobb__frame_from_direction(unit, rs->frame);
@@ -4254,7 +4457,7 @@ static int hairobb__ray_setup_from(hairobb__ray_state *rs, const hairobb_bvh *bv
     float max_r, magnitude, scratch[16];
     if (!hairobb__ray_setup(rs, bvh, ray)) return 0;
     if (!from || from->prim_id >= bvh->segment_count) return 1;
-    cp = hairobb__segment_points(bvh, from->prim_id, scratch);
+    cp = hairobb__segment_points(bvh, from->prim_id, rs->time, scratch);
     max_r = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
     magnitude = hairobb__maxf(hairobb__maxf(fabsf(ray->org[0]), fabsf(ray->org[1])), fabsf(ray->org[2]));
     rs->skip_t = (2.0f * max_r + magnitude * (8.0f * FLT_EPSILON)) * rs->inv_dir_length;
@@ -4848,14 +5051,14 @@ static int hairobb__refine_dip(hairobb__ray_state *rs, const hairobb__ray_poly *
    tangents there parallel within 1e-3: a smooth joint of a strand stored in
    order, as every renderer's buffers and .hair files are. (At a kink the
    ribbons part by more than rounding, as the definition has them.) */
-static int hairobb__joint_at(const hairobb_bvh *bvh, uint32_t prim, int end)
+static int hairobb__joint_at(const hairobb_bvh *bvh, uint32_t prim, int end, float time)
 {
     float scratch[2][16], a[3], b[3], cross[3];
     const float *p, *q;
     int k;
     if (end ? (size_t)prim + 1 >= bvh->segment_count : prim == 0) return 0;
-    p = hairobb__segment_points(bvh, prim, scratch[0]) + 12 * end;
-    q = hairobb__segment_points(bvh, end ? prim + 1 : prim - 1, scratch[1]) + 12 * (1 - end);
+    p = hairobb__segment_points(bvh, prim, time, scratch[0]) + 12 * end;
+    q = hairobb__segment_points(bvh, end ? prim + 1 : prim - 1, time, scratch[1]) + 12 * (1 - end);
     if (!(p[0] == q[0] && p[1] == q[1] && p[2] == q[2])) return 0;
     /* both tangents pointing along the strand, away from the joint's first segment */
     for (k = 0; k < 3; ++k) {
@@ -4886,7 +5089,7 @@ static int hairobb__try_end(const hairobb_bvh *bvh, hairobb__ray_state *rs, cons
                                    hairobb__maxf(hairobb__maxf(fabsf(c->x[next]), fabsf(c->y[next])), fabsf(c->z[next])));
     float slack = distance * (16.0f * FLT_EPSILON), at_tip = slack * (fabsf(x) + fabsf(y));
     if (!(fabsf(f) <= at_tip) &&
-        !(fabsf(f) <= at_tip + slack * (fabsf(dx) + fabsf(dy)) && hairobb__joint_at(bvh, prim, end)))
+        !(fabsf(f) <= at_tip + slack * (fabsf(dx) + fabsf(dy)) && hairobb__joint_at(bvh, prim, end, rs->time)))
         return 0;
     return hairobb__try_hit(rs, poly, prim, (float)end);
 }
@@ -5070,7 +5273,7 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
     float max_r, magnitude, scratch[16];
     int inside;
     HAIROBB__COUNT(segment);
-    hairobb__ray_points_v4(rs, hairobb__segment_points(bvh, prim, scratch), &qx, &qy, &qz, &r);
+    hairobb__ray_points_v4(rs, hairobb__segment_points(bvh, prim, rs->time, scratch), &qx, &qy, &qz, &r);
     x = hairobb__ray_row_v4(rs, 0, qx, qy, qz);
     y = hairobb__ray_row_v4(rs, 1, qx, qy, qz);
     max_r = hairobb__v4_hmax(r);
@@ -5114,7 +5317,7 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
 static int hairobb__skipped(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint32_t prim)
 {
     float scratch[16];
-    const float *cp = hairobb__segment_points(bvh, prim, scratch);
+    const float *cp = hairobb__segment_points(bvh, prim, rs->time, scratch);
     return prim == rs->skip_prim ||
            (cp[0] == rs->skip_last[0] && cp[1] == rs->skip_last[1] && cp[2] == rs->skip_last[2]) ||
            (cp[12] == rs->skip_first[0] && cp[13] == rs->skip_first[1] && cp[14] == rs->skip_first[2]);
@@ -5167,7 +5370,7 @@ static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs
                             float u, float t, hairobb_hit *hit)
 {
     float scratch[16];
-    const float *cp = hairobb__segment_points(bvh, prim, scratch);
+    const float *cp = hairobb__segment_points(bvh, prim, rs->time, scratch);
     hairobb__v4 x4 = hairobb__v4_load(c->x), y4 = hairobb__v4_load(c->y), z4 = hairobb__v4_set1(0.0f), r4 = hairobb__v4_load(c->r);
     hairobb__v4 value, d1, tangent, neg_dir, n4;
     float at[4], tangent_at[4], tangent_xy[2], x, y, r, tlen2, along, n[4], nlen;
@@ -5212,7 +5415,7 @@ static int hairobb__hit_filtered_out(const hairobb__ray_state *rs, uint32_t prim
     hairobb__ray_curve c;
     hairobb__v4 qx, qy, qz, r;
     float scratch[16];
-    hairobb__ray_points_v4(rs, hairobb__segment_points(rs->bvh, prim, scratch), &qx, &qy, &qz, &r);
+    hairobb__ray_points_v4(rs, hairobb__segment_points(rs->bvh, prim, rs->time, scratch), &qx, &qy, &qz, &r);
     hairobb__v4_store(c.x, hairobb__ray_row_v4(rs, 0, qx, qy, qz));
     hairobb__v4_store(c.y, hairobb__ray_row_v4(rs, 1, qx, qy, qz));
     hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));

@@ -1865,7 +1865,7 @@ static int save_load_bench(const options *o)
                 scene_camera_rays(&s, SIDE, SIDE, org, dir);
                 for (int i = 0; i < SIDE * SIDE && ok; i++) {
                     hairobb_ray ray = {{org[3 * i], org[3 * i + 1], org[3 * i + 2]}, 0.0f,
-                                       {dir[3 * i], dir[3 * i + 1], dir[3 * i + 2]}, INFINITY};
+                                       {dir[3 * i], dir[3 * i + 1], dir[3 * i + 2]}, INFINITY, 0.0f};
                     hairobb_hit a, b;
                     memset(&a, 0, sizeof a);
                     memset(&b, 0, sizeof b);

@@ -13,7 +13,7 @@ int main(void)
     };
     static const uint32_t indices[] = {0, 4};   /* first control point of each segment */
     hairobb_bvh *bvh;
-    hairobb_ray ray = {{0.2f, 0.6f, -5.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY};
+    hairobb_ray ray = {{0.2f, 0.6f, -5.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY, 0.0f};
     hairobb_hit hit;
     hairobb_result result = hairobb_build(vertices, 8, indices, 2, NULL, &bvh);
     if (result != HAIROBB_OK) {

@@ -151,7 +151,7 @@ static void check_basis(hairobb_basis basis, const strands *st)
     scene_update_bounds(&framing);
     scene_camera_rays(&framing, SIDE, SIDE, org, dir);
     for (i = 0; i < rays; ++i) {
-        hairobb_ray ray = {{org[3 * i], org[3 * i + 1], org[3 * i + 2]}, 0.0f, {dir[3 * i], dir[3 * i + 1], dir[3 * i + 2]}, INFINITY};
+        hairobb_ray ray = {{org[3 * i], org[3 * i + 1], org[3 * i + 2]}, 0.0f, {dir[3 * i], dir[3 * i + 1], dir[3 * i + 2]}, INFINITY, 0.0f};
         hairobb_hit hit;
         ref_hit want;
         float et = 0.0f, eu, ev;
@@ -337,7 +337,7 @@ static void test_arrays_freed_after_build(const strands *st)
     float *copy = (float *)malloc(16 * st->count);
     hairobb_build_options options;
     hairobb_bvh *bvh = NULL;
-    hairobb_ray ray = {{0.0f, -5.0f, 0.6f}, 0.0f, {0.0f, 1.0f, 0.0f}, INFINITY};
+    hairobb_ray ray = {{0.0f, -5.0f, 0.6f}, 0.0f, {0.0f, 1.0f, 0.0f}, INFINITY, 0.0f};
     hairobb_hit before, after;
     int hit_before, hit_after;
     memcpy(copy, st->points, 16 * st->count);

@@ -420,7 +420,7 @@ static void test_straight_hair(const char *path)
     dir = (float *)malloc(3 * sizeof(float) * rays);
     scene_camera_rays(&framing, 64, 64, org, dir);
     for (i = 0; bvh && reference && i < rays; ++i) {
-        hairobb_ray ray = {{org[3 * i], org[3 * i + 1], org[3 * i + 2]}, 0.0f, {dir[3 * i], dir[3 * i + 1], dir[3 * i + 2]}, INFINITY};
+        hairobb_ray ray = {{org[3 * i], org[3 * i + 1], org[3 * i + 2]}, 0.0f, {dir[3 * i], dir[3 * i + 1], dir[3 * i + 2]}, INFINITY, 0.0f};
         hairobb_hit hit;
         ref_hit want;
         int expected = ref_intersect(reference, org + 3 * i, dir + 3 * i, 0.0, INFINITY, &want);

@@ -845,7 +845,7 @@ static void deep_chains(void)
             hairobb_stats st;
             CHECK(r == HAIROBB_OK, "a chain of %d full nodes (deepest inner node %d) loads: %s", nodes, deepest, hairobb_result_string(r));
             if (bvh) {
-                hairobb_ray ray = {{0.0f, 0.0f, -5.0f}, 0.0f, {0.05f, 0.02f, 1.0f}, INFINITY};
+                hairobb_ray ray = {{0.0f, 0.0f, -5.0f}, 0.0f, {0.05f, 0.02f, 1.0f}, INFINITY, 0.0f};
                 hairobb_hit hit;
                 hairobb_get_stats(bvh, &st);
                 CHECK(st.max_depth == (unsigned)nodes && st.aabb_nodes == (size_t)nodes && st.leaves == leaf,
@@ -1105,7 +1105,7 @@ static void one_segment(void)
     r = hairobb_load(blob, size, v, 4, ix, 1, NULL, &loaded);
     CHECK(r == HAIROBB_OK && size == HAIROBB__SAVE_HEADER + 8 + 8, "one segment: %zu bytes, %s", size, hairobb_result_string(r));
     if (loaded) {
-        hairobb_ray ray = {{1.0f, 0.0f, -5.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY};
+        hairobb_ray ray = {{1.0f, 0.0f, -5.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY, 0.0f};
         hairobb_hit a, b;
         memset(&a, 0, sizeof a);
         memset(&b, 0, sizeof b);

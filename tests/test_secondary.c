@@ -128,7 +128,7 @@ static void test_scene(const char *name, hair_scene *s, int side)
     u.s = s; u.reference = reference; u.bvh = bvh;
     scene_camera_rays(s, side, side, org, dir);
     for (i = 0; i < rays; ++i) {
-        hairobb_ray primary = {{org[3 * i], org[3 * i + 1], org[3 * i + 2]}, 0.0f, {dir[3 * i], dir[3 * i + 1], dir[3 * i + 2]}, INFINITY};
+        hairobb_ray primary = {{org[3 * i], org[3 * i + 1], org[3 * i + 2]}, 0.0f, {dir[3 * i], dir[3 * i + 1], dir[3 * i + 2]}, INFINITY, 0.0f};
         hairobb_hit hit;
         int kind;
         if (!hairobb_intersect1(bvh, &primary, &hit)) continue;
@@ -203,7 +203,7 @@ static void test_contact_shadows(void)
     scene_rng_seed(&rng, 5);
     for (i = 0; bvh && i < n; ++i) {
         /* a camera ray down onto strand A, then a shadow ray toward B */
-        hairobb_ray primary = {{0.2f + 0.6f * scene_rng_float(&rng), -0.2f * r, 1.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, INFINITY};
+        hairobb_ray primary = {{0.2f + 0.6f * scene_rng_float(&rng), -0.2f * r, 1.0f}, 0.0f, {0.0f, 0.0f, -1.0f}, INFINITY, 0.0f};
         hairobb_ray shadow;
         hairobb_hit hit;
         ref_hit want;

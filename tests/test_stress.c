@@ -564,7 +564,7 @@ static void test_along_straight(void)
             /* in front looking along +x, behind looking back, in front
                looking away (a miss), and a direction of length 2 */
             static const float org_x[4] = {-1.0f, 2.0f, -1.0f, -1.0f}, dir_x[4] = {1.0f, -1.0f, -1.0f, 2.0f};
-            hairobb_ray ray = {{0.0f, 0.0f, 0.0f}, 0.0f, {0.0f, 0.0f, 0.0f}, INFINITY};
+            hairobb_ray ray = {{0.0f, 0.0f, 0.0f}, 0.0f, {0.0f, 0.0f, 0.0f}, INFINITY, 0.0f};
             ray.org[0] = org_x[side];
             ray.org[1] = offsets[o][0];
             ray.org[2] = offsets[o][1];

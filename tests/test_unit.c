@@ -797,7 +797,7 @@ static void test_hit_attributes(void)
     CHECK(bad_ng == 0, "%d hits with a bad Ng", bad_ng);
     /* tnear / tfar are honoured; an empty interval and a zero direction miss */
     {
-        hairobb_ray ray = {{0.5f, 0.0f, -2.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY};
+        hairobb_ray ray = {{0.5f, 0.0f, -2.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY, 0.0f};
         hairobb_hit hit;
         ref_hit ref;
         float lo[3], hi[3];
@@ -836,7 +836,7 @@ static void test_roots_hidden_in_one_piece(void)
         -0.00104784966f, 0.00540038943f, 1.80574322f, 0.000869829f};
     static const uint32_t index = 0;
     hairobb_bvh *bvh;
-    hairobb_ray ray = {{0.0f, 0.0f, 0.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY};
+    hairobb_ray ray = {{0.0f, 0.0f, 0.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY, 0.0f};
     hairobb_hit hit;
     ref_hit ref;
     memset(&ref, 0, sizeof ref);
@@ -881,7 +881,7 @@ static void test_degenerate_trees(void)
         CHECK(stats.max_depth <= 80, "degenerate scene %d: depth %u", scene, stats.max_depth);
         CHECK(stats.leaf_references == n && stats.leaves * 4 >= n, "degenerate scene %d: %zu leaves for %zu segments", scene, stats.leaves, n);
         for (r = 0; r < 400; ++r) {
-            hairobb_ray ray = {{0.0f, 0.0f, -3.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY};
+            hairobb_ray ray = {{0.0f, 0.0f, -3.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY, 0.0f};
             hairobb_hit hit;
             hairobb__ray_state rs;
             uint32_t p;
