@@ -969,45 +969,9 @@ struct hairobb_bvh {
     int points_in_place;              /* static Bezier points (input or copy): read where they are */
 };
 
-static void hairobb__to_bezier(hairobb_basis basis, const float *p, const float *t, float b[16]);
-
-/* Control points of segment prim made on the fly, into scratch: at time
-   (in [0, 1]) for a motion-blurred BVH, each float lerped between the two
-   steps around it; converted from the caller's basis without the copy.
-   Out of line and compiled once, so every SIMD path makes them alike. */
-static const float *hairobb__made_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
-#if defined(__GNUC__) || defined(__clang__)
-    __attribute__((noinline))
-#endif
-    ;
-static const float *hairobb__made_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
-{
-    size_t at = 4 * (size_t)bvh->indices[prim];
-    if (bvh->time_steps) {
-        float f = time * (float)(bvh->time_steps - 1), w;
-        unsigned k = (unsigned)f;
-        const float *a, *b;
-        int j;
-        if (k > bvh->time_steps - 2) k = bvh->time_steps - 2;
-        w = f - (float)k;
-        a = bvh->time_vertices[k] + at;
-        b = bvh->time_vertices[k + 1] + at;
-        for (j = 0; j < 16; ++j) scratch[j] = (1.0f - w) * a[j] + w * b[j];
-        return scratch;
-    }
-    hairobb__to_bezier(bvh->point_basis, bvh->vertices + at, bvh->tangents ? bvh->tangents + at : NULL, scratch);
-    return scratch;
-}
-
-/* The Bezier control points (x y z r, 4 each) of segment prim as traced
-   at time (a ray's; unused by static BVHs): every traversal path reads a
-   segment through here, with one predictable branch. scratch: room for
-   points made on the fly. */
-HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
-{
-    if (bvh->points_in_place) return bvh->vertices + 4 * (size_t)bvh->indices[prim];
-    return hairobb__made_points(bvh, prim, time, scratch);
-}
+/* The Bezier control points of segment prim as traced at time: defined
+   with the kernels ("Segment points as traced"), which read them per leaf. */
+HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16]);
 
 /* ------------------------------------------------------------------------ */
 /* Input: validation and per-segment bounds                                  */
@@ -1136,8 +1100,9 @@ static const float **hairobb__copy_steps(const float *const *time_vertices, unsi
 /* The Bezier control points (x, y, z, r each) of a segment given in another
    basis: p its points (4, or 2 for Hermite and linear), t the Hermite
    derivatives. The same cubic, so the same curve and the same u; radii
-   that overshoot below 0 (Catmull-Rom, Hermite) are clamped. */
-static void hairobb__to_bezier(hairobb_basis basis, const float *p, const float *t, float b[16])
+   that overshoot below 0 (Catmull-Rom, Hermite) are clamped. Inline, so
+   the AVX2 kernels' copy of hairobb__made_points converts in AVX2 code. */
+HAIROBB__INLINE void hairobb__to_bezier(hairobb_basis basis, const float *p, const float *t, float b[16])
 {
     int c;
     for (c = 0; c < 4; ++c) {
@@ -4667,6 +4632,49 @@ typedef hairobb__v4 hairobb__vn;
 #endif
 
 /* ------------------------------------------------------------------------ */
+/* Segment points as traced                                                  */
+/* ------------------------------------------------------------------------ */
+/* Control points of segment prim made on the fly, into scratch: at time
+   (in [0, 1]) for a motion-blurred BVH, each float lerped between the two
+   steps around it; converted from the caller's basis without the copy.
+   Out of line (a cold path beside the leaf's), compiled with each pass of
+   the kernels: AVX2 code calling SSE code was 2x slower (see
+   tests/check_dispatch_calls.sh). No FMA in any pass, so they round alike. */
+static const float *hairobb__made_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
+#if defined(__GNUC__) || defined(__clang__)
+    __attribute__((noinline))
+#endif
+    ;
+static const float *hairobb__made_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
+{
+    size_t at = 4 * (size_t)bvh->indices[prim];
+    if (bvh->time_steps) {
+        float f = time * (float)(bvh->time_steps - 1), w;
+        unsigned k = (unsigned)f;
+        const float *a, *b;
+        int j;
+        if (k > bvh->time_steps - 2) k = bvh->time_steps - 2;
+        w = f - (float)k;
+        a = bvh->time_vertices[k] + at;
+        b = bvh->time_vertices[k + 1] + at;
+        for (j = 0; j < 16; ++j) scratch[j] = (1.0f - w) * a[j] + w * b[j];
+        return scratch;
+    }
+    hairobb__to_bezier(bvh->point_basis, bvh->vertices + at, bvh->tangents ? bvh->tangents + at : NULL, scratch);
+    return scratch;
+}
+
+/* The Bezier control points (x y z r, 4 each) of segment prim as traced
+   at time (a ray's; unused by static BVHs): every traversal path reads a
+   segment through here, with one predictable branch. scratch: room for
+   points made on the fly. */
+HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
+{
+    if (bvh->points_in_place) return bvh->vertices + 4 * (size_t)bvh->indices[prim];
+    return hairobb__made_points(bvh, prim, time, scratch);
+}
+
+/* ------------------------------------------------------------------------ */
 /* Traversal                                                                 */
 /* ------------------------------------------------------------------------ */
 HAIROBB__INLINE hairobb__vn hairobb__far_scale(hairobb__vn tfar)
@@ -5502,6 +5510,7 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__intersect_rotated_node hairobb__intersect_rotated_node_avx2
 #define hairobb__intersect_segment hairobb__intersect_segment_avx2
 #define hairobb__joint_at hairobb__joint_at_avx2
+#define hairobb__made_points hairobb__made_points_avx2
 #define hairobb__piece_ends hairobb__piece_ends_avx2
 #define hairobb__piece_hit hairobb__piece_hit_avx2
 #define hairobb__ray_points_v4 hairobb__ray_points_v4_avx2
@@ -5510,6 +5519,7 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__refine_piece hairobb__refine_piece_avx2
 #define hairobb__ribbon_f hairobb__ribbon_f_avx2
 #define hairobb__ribbon_f_v8 hairobb__ribbon_f_v8_avx2
+#define hairobb__segment_points hairobb__segment_points_avx2
 #define hairobb__skipped hairobb__skipped_avx2
 #define hairobb__solve_bracketed hairobb__solve_bracketed_avx2
 #define hairobb__to_power_form hairobb__to_power_form_avx2
