@@ -296,6 +296,82 @@ static inline size_t scene_strand_count_for(size_t target_segments, size_t segme
 }
 
 /* ------------------------------------------------------------------------ */
+/* Motion blur: a scene's control points at time_steps times tau = k / (time_steps - 1). */
+
+typedef enum scene_motion {
+    SCENE_MOTION_ROTATE,     /* each strand swept by amount * tau radians about the line through its root
+                                along the direction from the scene's centre to the root (the sphere's normal) */
+    SCENE_MOTION_TRANSLATE   /* every point moved by amount * tau along (1, 0.5, 0.25) normalised */
+} scene_motion;
+
+static inline void scene_motion_free(float **steps, int time_steps)
+{
+    for (int k = 0; k < time_steps; k++) {
+        free(steps[k]);
+        steps[k] = NULL;
+    }
+}
+
+/* Fills steps[0..time_steps) with arrays of s->vertex_count points (16-byte
+   aligned, with the scene's 16 bytes of defined padding): step 0 is the
+   scene as it is, radii are kept. A strand starts at a segment whose first
+   point is not the previous segment's last (independent Bezier segments of
+   a polyline repeat the joint). Rotations are done in double. Returns 0, or
+   1 when out of memory (nothing left allocated). */
+static inline int scene_motion_steps(const hair_scene *s, scene_motion motion, double amount, int time_steps, float **steps)
+{
+    double centre[3];
+    for (int a = 0; a < 3; a++) centre[a] = 0.5 * ((double)s->lower[a] + (double)s->upper[a]);
+    for (int k = 0; k < time_steps; k++) {
+        void *p = NULL;
+        steps[k] = NULL;
+        if (posix_memalign(&p, 16, s->vertex_count * 4 * sizeof(float) + 16) != 0) {
+            scene_motion_free(steps, k);
+            return 1;
+        }
+        steps[k] = (float *)p;
+        memcpy(steps[k], s->vertices, s->vertex_count * 4 * sizeof(float) + 16);
+    }
+    if (motion == SCENE_MOTION_TRANSLATE) {
+        const double d[3] = {1.0 / 1.1456439237389600, 0.5 / 1.1456439237389600, 0.25 / 1.1456439237389600};
+        for (int k = 1; k < time_steps; k++) {
+            double tau = (double)k / (time_steps - 1);
+            for (size_t i = 0; i < s->vertex_count; i++)
+                for (int a = 0; a < 3; a++)
+                    steps[k][4 * i + a] = (float)((double)s->vertices[4 * i + a] + amount * tau * d[a]);
+        }
+        return 0;
+    }
+    const float *root = NULL;
+    for (size_t i = 0; i < s->segment_count; i++) {
+        const float *first = s->vertices + 4 * (size_t)s->indices[i];
+        if (i == 0 || memcmp(first, s->vertices + 4 * (size_t)s->indices[i - 1] + 12, 3 * sizeof(float)) != 0)
+            root = first;
+        double axis[3], length = 0.0;
+        for (int a = 0; a < 3; a++) {
+            axis[a] = (double)root[a] - centre[a];
+            length += axis[a] * axis[a];
+        }
+        length = sqrt(length);
+        for (int a = 0; a < 3; a++) axis[a] = length > 0.0 ? axis[a] / length : (a == 2);
+        for (int k = 1; k < time_steps; k++) {
+            double angle = amount * (double)k / (time_steps - 1), c = cos(angle), sn = sin(angle);
+            for (int j = 0; j < 4; j++) {
+                const float *v = first + 4 * j;
+                float *out = steps[k] + 4 * (size_t)s->indices[i] + 4 * j;
+                double q[3] = {(double)v[0] - root[0], (double)v[1] - root[1], (double)v[2] - root[2]};
+                double along = axis[0] * q[0] + axis[1] * q[1] + axis[2] * q[2];
+                double cross[3] = {axis[1] * q[2] - axis[2] * q[1], axis[2] * q[0] - axis[0] * q[2], axis[0] * q[1] - axis[1] * q[0]};
+                /* Rodrigues: q c + (axis x q) s + axis (axis . q)(1 - c) */
+                for (int a = 0; a < 3; a++)
+                    out[a] = (float)((double)root[a] + q[a] * c + cross[a] * sn + axis[a] * along * (1.0 - c));
+            }
+        }
+    }
+    return 0;
+}
+
+/* ------------------------------------------------------------------------ */
 /* Procedural scenes. Each has about target_segments segments and depends only
    on (target_segments, seed). Return 0 on success. */
 
