@@ -765,7 +765,14 @@ HAIROBB_DEF void hairobb_hair_free(hairobb_hair *hair);
 #define HAIROBB__REF_QOBB 6u           /* compressed node, rotated */
 #define HAIROBB__REF_QOBB_PER_CHILD 7u /* compressed node, a rotation per child */
 #define HAIROBB__REF_TASK 8u           /* builder only: index << 4 of a subtree built as a task */
+/* Moving hair's compressed nodes (motion blur): the still type 4 below,
+   then a second set of byte planes, the boxes at time 1 (linear bounds) */
+#define HAIROBB__REF_QAABB_MB 9u
+#define HAIROBB__REF_QOBB_MB 10u
+#define HAIROBB__REF_QOBB_PER_CHILD_MB 11u
 #define HAIROBB__REF_TYPE(ref) ((unsigned)((ref) & 15u))
+#define HAIROBB__MOVING(type) ((type) >= HAIROBB__REF_QAABB_MB && (type) <= HAIROBB__REF_QOBB_PER_CHILD_MB)
+#define HAIROBB__STILL_TYPE(type) (HAIROBB__MOVING(type) ? (type) - 4u : (type))
 
 /* ------------------------------------------------------------------------ */
 /* Small vector helpers                                                      */
@@ -2608,7 +2615,7 @@ static void hairobb__store_compressed(float step_out[3], signed char (*lower_byt
 
 static size_t hairobb__node_size(unsigned node_type)
 {
-    switch (node_type) {
+    switch (HAIROBB__STILL_TYPE(node_type)) {
     case HAIROBB__REF_AABB: return sizeof(hairobb__aabb_node);
     case HAIROBB__REF_OBB: return sizeof(hairobb__obb_node);
     case HAIROBB__REF_ROTATED: return sizeof(hairobb__rotated_node);
@@ -2617,13 +2624,19 @@ static size_t hairobb__node_size(unsigned node_type)
     }
 }
 
+/* Bytes of a moving node's planes at time 1, after the node: lower and
+   upper bytes [6][W] as the node's own, to a multiple of 16. */
+#define HAIROBB__END_PLANES ((6 * HAIROBB__W + 15) / 16 * 16)
+
 /* Node memory a node takes: the node, and after an affine OBB node the
    main direction of each child's frame (3 floats, a multiple of 16 bytes
    per node), which its maps no longer give exactly; the traversal never
-   reads them, hairobb_refit rebuilds the frames from them. */
+   reads them, hairobb_refit rebuilds the frames from them. A moving node's
+   planes at time 1 follow it. */
 static size_t hairobb__node_stride(unsigned node_type)
 {
-    return hairobb__node_size(node_type) + (node_type == HAIROBB__REF_OBB ? HAIROBB__W * 3 * sizeof(float) : 0);
+    return hairobb__node_size(node_type) + (node_type == HAIROBB__REF_OBB ? HAIROBB__W * 3 * sizeof(float) : 0) +
+           (HAIROBB__MOVING(node_type) ? HAIROBB__END_PLANES : 0);
 }
 
 /* Keeps the frames of a node's children as its type stores them (node
@@ -2633,6 +2646,7 @@ static size_t hairobb__node_stride(unsigned node_type)
 static void hairobb__store_frames(unsigned char *node, unsigned node_type, int count, const float (*frames)[9])
 {
     int i, k;
+    node_type = HAIROBB__STILL_TYPE(node_type);
     if (node_type == HAIROBB__REF_OBB) {
         float *directions = HAIROBB__CAST(float *, (void *)(node + sizeof(hairobb__obb_node)));
         float identity[9];
@@ -2658,6 +2672,7 @@ static void hairobb__store_frames(unsigned char *node, unsigned node_type, int c
 static void hairobb__node_frames(const unsigned char *node, unsigned node_type, int count, float (*frames)[9])
 {
     int i, k;
+    node_type = HAIROBB__STILL_TYPE(node_type);
     if (node_type == HAIROBB__REF_OBB) {
         const float *directions = HAIROBB__CAST(const float *, (const void *)(node + sizeof(hairobb__obb_node)));
         for (i = 0; i < count; ++i) {
@@ -2680,6 +2695,130 @@ static void hairobb__node_frames(const unsigned char *node, unsigned node_type, 
     }
 }
 
+/* Linear bounds of a moving range: its boxes at time 0 and time 1 in frame
+   around centre, whose lerp holds the range at every time. Each step's box
+   is bounded as a still one (the ribbon at a step's time is the still
+   ribbon of those points); the lines through the first and the last step's
+   planes are moved out by the most any other step sticks out of them, so
+   they hold every step, and the points in between, which move linearly.
+   Padded as hairobb__pad_box, and for the leaf's rounding of the lerped
+   points, which scales with their distance from the world origin. */
+static void hairobb__node_box_ends(const hairobb__builder *b, const hairobb__range *r, const float frame[9],
+                                   const float centre[3], float lower[2][3], float upper[2][3])
+{
+    unsigned last = b->time_steps - 1, n, step;
+    double line_lower[2][3], line_upper[2][3], out_lower[3] = {0.0, 0.0, 0.0}, out_upper[3] = {0.0, 0.0, 0.0};
+    float norms[3], far = 0.0f;
+    hairobb__frame_prep prep;
+    int k, e;
+    hairobb__prepare_frame(frame, &prep);
+    for (k = 0; k < 3; ++k) {   /* rounded up: the radius must not shrink */
+        norms[k] = sqrtf(hairobb__dot3(frame + 3 * k, frame + 3 * k)) * (1.0f + 1.0f / 1048576.0f);
+        far = hairobb__maxf(far, fabsf(centre[k]));
+    }
+    for (n = 0; n <= last; ++n) {   /* the two ends first, then the steps between */
+        hairobb__b4 box_lower = hairobb__b4_set1(FLT_MAX), box_upper = hairobb__b4_set1(-FLT_MAX);
+        float lo[3], hi[3];
+        size_t i;
+        step = n == 0 ? 0 : n == 1 ? last : n - 1;
+        for (i = r->begin; i < r->end; ++i) {
+            float scratch[16];
+            hairobb__b4 l, h;
+            hairobb__segment_box_v4(hairobb__ref_points_in(b, b->time_vertices[step], i, scratch), &prep, centre, norms, &l, &h);
+            box_lower = hairobb__b4_min(box_lower, l);
+            box_upper = hairobb__b4_max(box_upper, h);
+        }
+        hairobb__b4_store3(lo, box_lower);
+        hairobb__b4_store3(hi, box_upper);
+        for (k = 0; k < 3; ++k) {
+            double tau = (double)step / (double)last;
+            if (n < 2) {
+                line_lower[n][k] = lo[k];
+                line_upper[n][k] = hi[k];
+                continue;
+            }
+            out_lower[k] = fmax(out_lower[k], line_lower[0][k] + tau * (line_lower[1][k] - line_lower[0][k]) - lo[k]);
+            out_upper[k] = fmax(out_upper[k], hi[k] - (line_upper[0][k] + tau * (line_upper[1][k] - line_upper[0][k])));
+        }
+    }
+    for (k = 0; k < 3; ++k) {
+        float mag = 0.0f, pad;
+        for (e = 0; e < 2; ++e) {
+            /* to float, outward */
+            double l = line_lower[e][k] - out_lower[k], h = line_upper[e][k] + out_upper[k];
+            lower[e][k] = (float)l;
+            upper[e][k] = (float)h;
+            if ((double)lower[e][k] > l) lower[e][k] = nextafterf(lower[e][k], -FLT_MAX);
+            if ((double)upper[e][k] < h) upper[e][k] = nextafterf(upper[e][k], FLT_MAX);
+            mag = hairobb__maxf(mag, hairobb__maxf(hairobb__maxf(fabsf(lower[e][k]), fabsf(upper[e][k])), upper[e][k] - lower[e][k]));
+        }
+        pad = (mag + 2.0f * norms[k] * far) * (1.0f / 2097152.0f) + 1e-30f;   /* 2^-21 relative */
+        for (e = 0; e < 2; ++e) {
+            lower[e][k] -= pad;
+            upper[e][k] += pad;
+        }
+    }
+}
+
+/* Moving children's boxes at both ends (lower[i][end]) to bytes, planes[end]
+   laid out as a compressed node's lower and upper [6][W]: a step per axis
+   that fits both ends with room (1/64) for the slack, then each plane
+   rounded outward by 2^-12 steps more than needed, which covers the
+   traversal's lerp of the bytes (b0 + tau (b1 - b0) rounds by less than
+   2^-15 steps) and its product with the step. */
+static void hairobb__store_compressed_ends(float step_out[3], signed char *planes[2], int count,
+                                           const float (*lower)[2][3], const float (*upper)[2][3])
+{
+    int i, k, e;
+    for (k = 0; k < 3; ++k) {
+        float largest = 0.0f, step;
+        for (i = 0; i < count; ++i)
+            for (e = 0; e < 2; ++e) largest = hairobb__maxf(largest, hairobb__maxf(fabsf(lower[i][e][k]), fabsf(upper[i][e][k])));
+        step = hairobb__maxf(largest * (1.0f / 125.0f), 1e-30f);
+        step_out[k] = step;
+        for (e = 0; e < 2; ++e)
+            for (i = 0; i < HAIROBB__W; ++i) {
+                double lo = 127.0, hi = -128.0;      /* empty lane: lower above upper */
+                if (i < count) {
+                    lo = floor((double)lower[i][e][k] / step - 1.0 / 4096.0);
+                    hi = ceil((double)upper[i][e][k] / step + 1.0 / 4096.0);
+                    lo = lo < -127.0 ? -127.0 : lo;
+                    hi = hi > 127.0 ? 127.0 : hi;
+                }
+                planes[e][k * HAIROBB__W + i] = (signed char)lo;
+                planes[e][(3 + k) * HAIROBB__W + i] = (signed char)hi;
+            }
+    }
+}
+
+/* hairobb__write_boxes for the moving compressed nodes: both ends' planes. */
+static void hairobb__write_moving_boxes(const hairobb__builder *b, unsigned char *node_memory, unsigned node_type,
+                                        const float centre[3], const hairobb__range *ranges, int count, const float (*frames)[9])
+{
+    float lower[HAIROBB__W][2][3], upper[HAIROBB__W][2][3];
+    signed char *planes[2];
+    float *node_centre, *step;
+    int per_child = node_type == HAIROBB__REF_QOBB_PER_CHILD_MB, i, k, e;
+    if (per_child) {
+        hairobb__compressed_obb_node *node = HAIROBB__CAST(hairobb__compressed_obb_node *, (void *)node_memory);
+        node_centre = node->centre; step = node->step; planes[0] = node->lower[0];
+    } else {
+        hairobb__compressed_node *node = HAIROBB__CAST(hairobb__compressed_node *, (void *)node_memory);
+        node_centre = node->centre; step = node->step; planes[0] = node->lower[0];
+    }
+    planes[1] = HAIROBB__CAST(signed char *, (void *)(node_memory + hairobb__node_size(node_type)));
+    memcpy(node_centre, centre, 3 * sizeof(float));
+    for (i = 0; i < count; ++i) hairobb__node_box_ends(b, &ranges[i], frames[per_child ? i : 0], node_centre, lower[i], upper[i]);
+    hairobb__store_compressed_ends(step, planes, count, (const float (*)[2][3])lower, (const float (*)[2][3])upper);
+    if (per_child)   /* empty lanes as a still node's: the identity, a point box at -128 steps */
+        for (i = count; i < HAIROBB__W; ++i) {
+            hairobb__compressed_obb_node *node = HAIROBB__CAST(hairobb__compressed_obb_node *, (void *)node_memory);
+            node->rotation[0][i] = node->rotation[4][i] = node->rotation[8][i] = 127;
+            for (e = 0; e < 2; ++e)
+                for (k = 0; k < 6; ++k) planes[e][k * HAIROBB__W + i] = -128;
+        }
+}
+
 /* Writes the boxes of a node's children, child i bounding the references
    of ranges[i] in its frame (hairobb__node_frames) around centre, and the
    node's empty lanes; its frames and child references are left as they
@@ -2692,6 +2831,10 @@ static void hairobb__write_boxes(const hairobb__builder *b, unsigned char *node_
                                  const float (*axis_boxes)[6])
 {
     int i, k;
+    if (HAIROBB__MOVING(node_type)) {
+        hairobb__write_moving_boxes(b, node_memory, node_type, centre, ranges, count, frames);
+        return;
+    }
     if (node_type == HAIROBB__REF_OBB) {
         hairobb__obb_node *node = HAIROBB__CAST(hairobb__obb_node *, (void *)node_memory);
         memcpy(node->centre, centre, 3 * sizeof(float));
@@ -2809,7 +2952,11 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
     }
     if (b->policy == HAIROBB_NODES_AABB_ONLY) use_obb = 0;
 
-    if (b->obb_layout == HAIROBB_OBB_COMPRESSED) node_type = use_obb ? HAIROBB__REF_QOBB : HAIROBB__REF_QAABB;
+    /* moving hair: the compressed layouts' moving nodes (linear bounds); no float nodes */
+    if (b->time_steps && b->obb_layout == HAIROBB_OBB_COMPRESSED) node_type = use_obb ? HAIROBB__REF_QOBB_MB : HAIROBB__REF_QAABB_MB;
+    else if (b->time_steps && b->obb_layout == HAIROBB_OBB_COMPRESSED_PER_CHILD)
+        node_type = use_obb ? HAIROBB__REF_QOBB_PER_CHILD_MB : HAIROBB__REF_QAABB_MB;
+    else if (b->obb_layout == HAIROBB_OBB_COMPRESSED) node_type = use_obb ? HAIROBB__REF_QOBB : HAIROBB__REF_QAABB;
     else if (b->obb_layout == HAIROBB_OBB_COMPRESSED_PER_CHILD)   /* float nodes near the root: see HAIROBB__FLOAT_NODES */
         node_type = !use_obb ? HAIROBB__REF_AABB : r->end - r->begin > HAIROBB__FLOAT_NODES ? HAIROBB__REF_OBB : HAIROBB__REF_QOBB_PER_CHILD;
     else if (use_obb && b->obb_layout == HAIROBB_OBB_PER_CHILD) node_type = HAIROBB__REF_OBB;
@@ -2828,12 +2975,12 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
     node = b->nodes + offset;
     memset(node, 0, node_stride);
     for (i = 0; i < count; ++i) hint[i] = NULL;
-    if (node_type == HAIROBB__REF_OBB || node_type == HAIROBB__REF_QOBB_PER_CHILD) {
+    if (node_type == HAIROBB__REF_OBB || HAIROBB__STILL_TYPE(node_type) == HAIROBB__REF_QOBB_PER_CHILD) {
         for (i = 0; i < count; ++i) {
             hairobb__choose_hair_spaces(b, &ranges[i], 1, 1, frames[i], hints[i]);
             hint[i] = hints[i];
         }
-    } else if (node_type == HAIROBB__REF_QOBB || node_type == HAIROBB__REF_ROTATED) {
+    } else if (HAIROBB__STILL_TYPE(node_type) == HAIROBB__REF_QOBB || node_type == HAIROBB__REF_ROTATED) {
         hairobb__choose_hair_space(b, ranges, count, 1, frames[0]);
     }
     hairobb__store_frames(node, node_type, count, (const float (*)[9])frames);
@@ -3437,23 +3584,35 @@ static float hairobb__child_area(const unsigned char *node_memory, unsigned type
             extent[k] = 1.0f / sqrtf(a * a + b * b + c * c);
         }
     } else {
-        float frames[HAIROBB__W][9];
+        float frames[HAIROBB__W][9], end[3];
         const float *step, *frame;
-        const signed char *lower, *upper;
-        if (type == HAIROBB__REF_QOBB_PER_CHILD) {
+        const signed char *planes;
+        if (HAIROBB__STILL_TYPE(type) == HAIROBB__REF_QOBB_PER_CHILD) {
             const hairobb__compressed_obb_node *node = HAIROBB__CAST(const hairobb__compressed_obb_node *, (const void *)node_memory);
             hairobb__node_frames(node_memory, type, lane + 1, frames);
             frame = frames[lane];
-            step = node->step; lower = node->lower[0]; upper = node->upper[0];
+            step = node->step; planes = node->lower[0];
         } else {
             const hairobb__compressed_node *node = HAIROBB__CAST(const hairobb__compressed_node *, (const void *)node_memory);
             hairobb__node_frames(node_memory, type, 1, frames);
             frame = frames[0];
-            step = node->step; lower = node->lower[0]; upper = node->upper[0];
+            step = node->step; planes = node->lower[0];
         }
-        for (k = 0; k < 3; ++k)
-            extent[k] = (float)(upper[k * HAIROBB__W + lane] - lower[k * HAIROBB__W + lane]) * step[k] /
-                        sqrtf(hairobb__dot3(frame + 3 * k, frame + 3 * k));
+        for (k = 0; k < 3; ++k) {
+            float scale = step[k] / sqrtf(hairobb__dot3(frame + 3 * k, frame + 3 * k));
+            const signed char *ends = HAIROBB__CAST(const signed char *, (const void *)(node_memory + hairobb__node_size(type)));
+            extent[k] = (float)(planes[(3 + k) * HAIROBB__W + lane] - planes[k * HAIROBB__W + lane]) * scale;
+            if (HAIROBB__MOVING(type)) end[k] = (float)(ends[(3 + k) * HAIROBB__W + lane] - ends[k * HAIROBB__W + lane]) * scale;
+        }
+        /* a moving box's extents are lines in time: the mean of their products over [0, 1] */
+        if (HAIROBB__MOVING(type)) {
+            float area = 0.0f;
+            for (k = 0; k < 3; ++k) {
+                int j = (k + 1) % 3;
+                area += (extent[k] * extent[j] + end[k] * end[j]) / 3.0f + (extent[k] * end[j] + end[k] * extent[j]) / 6.0f;
+            }
+            return area;
+        }
     }
     return extent[0] * extent[1] + extent[1] * extent[2] + extent[2] * extent[0];
 }
@@ -3475,14 +3634,15 @@ static int hairobb__children(const unsigned char *nodes, uint64_t ref, uint64_t 
    leaf its segments (HAIROBB__COST_SEGMENT each), as in the builder. */
 static double hairobb__sah_subtree(const hairobb_bvh *bvh, uint64_t ref, double area)
 {
-    unsigned type = HAIROBB__REF_TYPE(ref);
+    unsigned type = HAIROBB__REF_TYPE(ref), still;
     uint64_t child[HAIROBB__W];
     double cost;
     int count, i;
     if (type == HAIROBB__REF_LEAF) return area * (double)HAIROBB__COST_SEGMENT * (double)((ref >> 4) & 15u);
     if (type == HAIROBB__REF_EMPTY) return 0.0;
     count = hairobb__children(bvh->nodes, ref, child);
-    cost = area * (double)count * (double)(type == HAIROBB__REF_AABB || type == HAIROBB__REF_QAABB ? HAIROBB__COST_AABB : HAIROBB__COST_OBB);
+    still = HAIROBB__STILL_TYPE(type);
+    cost = area * (double)count * (double)(still == HAIROBB__REF_AABB || still == HAIROBB__REF_QAABB ? HAIROBB__COST_AABB : HAIROBB__COST_OBB);
     for (i = 0; i < count; ++i)
         cost += hairobb__sah_subtree(bvh, child[i], (double)hairobb__child_area(bvh->nodes + (ref & ~(uint64_t)15), type, i));
     return cost;
@@ -4008,7 +4168,7 @@ static int hairobb__check_tree(hairobb__tree_check *c, uint64_t ref, unsigned de
         c->reached[granule / 8] |= (unsigned char)(1u << (granule % 8));
     }
     c->reached_bytes += stride;
-    if (type == HAIROBB__REF_AABB || type == HAIROBB__REF_QAABB) c->stats.aabb_nodes++; else c->stats.obb_nodes++;
+    if (type == HAIROBB__REF_AABB || HAIROBB__STILL_TYPE(type) == HAIROBB__REF_QAABB) c->stats.aabb_nodes++; else c->stats.obb_nodes++;
     /* 2..W children, the empty lanes last (as hairobb__build_node fills them) */
     child_count = hairobb__children(c->nodes, ref, child);
     for (i = child_count; i < HAIROBB__W; ++i)
@@ -4018,15 +4178,18 @@ static int hairobb__check_tree(hairobb__tree_check *c, uint64_t ref, unsigned de
     return child_count >= 2;
 }
 
-/* The node types a layout and policy build (hairobb__build_node). */
-static unsigned hairobb__layout_types(hairobb_obb_layout layout, hairobb_node_policy policy)
+/* The node types a layout and policy build (hairobb__build_node), for
+   still or moving hair. */
+static unsigned hairobb__layout_types(hairobb_obb_layout layout, hairobb_node_policy policy, int moving)
 {
-    unsigned types = 0, aabb = 1u << HAIROBB__REF_AABB | 1u << HAIROBB__REF_QAABB;
+    unsigned types = 0, aabb = 1u << HAIROBB__REF_AABB | 1u << HAIROBB__REF_QAABB | 1u << HAIROBB__REF_QAABB_MB;
     if (layout == HAIROBB_OBB_PER_CHILD) types = 1u << HAIROBB__REF_AABB | 1u << HAIROBB__REF_OBB;
     if (layout == HAIROBB_OBB_SHARED_ROTATION) types = 1u << HAIROBB__REF_AABB | 1u << HAIROBB__REF_ROTATED;
     if (layout == HAIROBB_OBB_COMPRESSED) types = 1u << HAIROBB__REF_QAABB | 1u << HAIROBB__REF_QOBB;
     if (layout == HAIROBB_OBB_COMPRESSED_PER_CHILD)
         types = 1u << HAIROBB__REF_AABB | 1u << HAIROBB__REF_OBB | 1u << HAIROBB__REF_QOBB_PER_CHILD;
+    if (moving && layout == HAIROBB_OBB_COMPRESSED) types = 1u << HAIROBB__REF_QAABB_MB | 1u << HAIROBB__REF_QOBB_MB;
+    if (moving && layout == HAIROBB_OBB_COMPRESSED_PER_CHILD) types = 1u << HAIROBB__REF_QAABB_MB | 1u << HAIROBB__REF_QOBB_PER_CHILD_MB;
     if (policy == HAIROBB_NODES_AABB_ONLY) types &= aabb;
     if (policy == HAIROBB_NODES_OBB_ONLY) types &= ~aabb;
     return types;
@@ -4177,7 +4340,7 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
     check.nodes = bvh->nodes;
     check.node_bytes = bvh->node_bytes;
     check.leaf_prim_count = bvh->leaf_prim_count;
-    check.inner_types = hairobb__layout_types((hairobb_obb_layout)layout, (hairobb_node_policy)policy);
+    check.inner_types = hairobb__layout_types((hairobb_obb_layout)layout, (hairobb_node_policy)policy, saved_steps != 0);
     check.max_leaf = max_leaf;
     if (!hairobb__check_tree(&check, bvh->root, 0) || check.next_leaf != check.leaf_prim_count ||
         check.reached_bytes != check.node_bytes)
@@ -4721,10 +4884,11 @@ static int hairobb__intersect_rotated_node(const hairobb__rotated_node *node, co
    byte planes lower[3][W], upper[3][W] are laid out as the float ones, so
    the slab ray's plane offsets index them too. */
 HAIROBB__INLINE int hairobb__intersect_compressed_node(const hairobb__compressed_node *node, int rotated,
-                                                       const hairobb__ray_state *rs, float dist[HAIROBB__W])
+                                                       const signed char *end_planes, const hairobb__ray_state *rs,
+                                                       float dist[HAIROBB__W])
 {
     hairobb__slab_ray slab;
-    hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
+    hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar), tau = hairobb__vn_set1(rs->time);
     const signed char *planes = node->lower[0];
     float moved[3];
     int k;
@@ -4743,8 +4907,14 @@ HAIROBB__INLINE int hairobb__intersect_compressed_node(const hairobb__compressed
     }
     for (k = 0; k < 3; ++k) {
         hairobb__vn o = hairobb__vn_set1(slab.org[k]), r = hairobb__vn_set1(slab.rdir[k]), step = hairobb__vn_set1(node->step[k]);
-        hairobb__vn near_plane = hairobb__vn_mul(hairobb__vn_from_bytes(planes + slab.near_plane[k]), step);
-        hairobb__vn far_plane = hairobb__vn_mul(hairobb__vn_from_bytes(planes + slab.far_plane[k]), step);
+        hairobb__vn near_plane = hairobb__vn_from_bytes(planes + slab.near_plane[k]);
+        hairobb__vn far_plane = hairobb__vn_from_bytes(planes + slab.far_plane[k]);
+        if (end_planes) {   /* moving: the planes lerped to the ray's time, in steps */
+            near_plane = hairobb__vn_add(near_plane, hairobb__vn_mul(tau, hairobb__vn_sub(hairobb__vn_from_bytes(end_planes + slab.near_plane[k]), near_plane)));
+            far_plane = hairobb__vn_add(far_plane, hairobb__vn_mul(tau, hairobb__vn_sub(hairobb__vn_from_bytes(end_planes + slab.far_plane[k]), far_plane)));
+        }
+        near_plane = hairobb__vn_mul(near_plane, step);
+        far_plane = hairobb__vn_mul(far_plane, step);
         tn = hairobb__vn_max(hairobb__vn_mul(hairobb__vn_sub(near_plane, o), r), tn);
         tf = hairobb__vn_min(hairobb__vn_mul(hairobb__vn_sub(far_plane, o), r), tf);
     }
@@ -4760,9 +4930,10 @@ HAIROBB__INLINE int hairobb__intersect_compressed_node(const hairobb__compressed
    share): a slab the ray runs along does not cut its interval. The axes are
    written out: a loop over them costs 4 instructions an axis. */
 HAIROBB__INLINE int hairobb__intersect_compressed_obb_node(const hairobb__compressed_obb_node *node,
-                                                           const hairobb__ray_state *rs, float dist[HAIROBB__W])
+                                                           const signed char *end_planes, const hairobb__ray_state *rs,
+                                                           float dist[HAIROBB__W])
 {
-    hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
+    hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar), tau = hairobb__vn_set1(rs->time);
     hairobb__vn ox = hairobb__vn_set1(rs->org[0] - node->centre[0]), oy = hairobb__vn_set1(rs->org[1] - node->centre[1]);
     hairobb__vn oz = hairobb__vn_set1(rs->org[2] - node->centre[2]);
     hairobb__vn dx = hairobb__vn_set1(rs->dir[0]), dy = hairobb__vn_set1(rs->dir[1]), dz = hairobb__vn_set1(rs->dir[2]);
@@ -4773,8 +4944,13 @@ HAIROBB__INLINE int hairobb__intersect_compressed_obb_node(const hairobb__compre
         hairobb__vn o = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, ox), hairobb__vn_mul(m1, oy)), hairobb__vn_mul(m2, oz)); \
         hairobb__vn d = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, dx), hairobb__vn_mul(m1, dy)), hairobb__vn_mul(m2, dz)); \
         hairobb__vn r = hairobb__vn_div(one, d), step = hairobb__vn_set1(node->step[k]); \
-        hairobb__vn t0 = hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_mul(hairobb__vn_from_bytes(node->lower[k]), step), o), r); \
-        hairobb__vn t1 = hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_mul(hairobb__vn_from_bytes(node->upper[k]), step), o), r); \
+        hairobb__vn lo = hairobb__vn_from_bytes(node->lower[k]), hi = hairobb__vn_from_bytes(node->upper[k]), t0, t1; \
+        if (end_planes) {   /* moving: the planes lerped to the ray's time, in steps */ \
+            lo = hairobb__vn_add(lo, hairobb__vn_mul(tau, hairobb__vn_sub(hairobb__vn_from_bytes(end_planes + (k) * HAIROBB__W), lo))); \
+            hi = hairobb__vn_add(hi, hairobb__vn_mul(tau, hairobb__vn_sub(hairobb__vn_from_bytes(end_planes + (3 + (k)) * HAIROBB__W), hi))); \
+        } \
+        t0 = hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_mul(lo, step), o), r); \
+        t1 = hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_mul(hi, step), o), r); \
         tn = hairobb__vn_max(hairobb__vn_min(t0, t1), tn); \
         tf = hairobb__vn_min(hairobb__vn_max(t0, t1), tf); \
     } while (0)
@@ -4835,7 +5011,7 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
         int bits, i;
         if (type == HAIROBB__REF_QOBB_PER_CHILD) {
             node = bvh->nodes + (ref & ~(uint64_t)15);
-            bits = hairobb__intersect_compressed_obb_node(HAIROBB__CAST(const hairobb__compressed_obb_node *, node), rs, dist);
+            bits = hairobb__intersect_compressed_obb_node(HAIROBB__CAST(const hairobb__compressed_obb_node *, node), NULL, rs, dist);
             child = HAIROBB__CAST(const hairobb__compressed_obb_node *, node)->child;
         } else if (type == HAIROBB__REF_AABB) {
             const hairobb__aabb_node *aabb = HAIROBB__CAST(const hairobb__aabb_node *, (const void *)(bvh->nodes + (ref & ~(uint64_t)15)));
@@ -4855,12 +5031,22 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
         } else if (type == HAIROBB__REF_QAABB || type == HAIROBB__REF_QOBB) {
             node = bvh->nodes + (ref & ~(uint64_t)15);
             bits = hairobb__intersect_compressed_node(HAIROBB__CAST(const hairobb__compressed_node *, node),
-                                                      type == HAIROBB__REF_QOBB, rs, dist);
+                                                      type == HAIROBB__REF_QOBB, NULL, rs, dist);
             child = HAIROBB__CAST(const hairobb__compressed_node *, node)->child;
         } else if (type == HAIROBB__REF_ROTATED) {
             node = bvh->nodes + (ref & ~(uint64_t)15);
             bits = hairobb__intersect_rotated_node(HAIROBB__CAST(const hairobb__rotated_node *, node), rs, dist);
             child = HAIROBB__CAST(const hairobb__rotated_node *, node)->child;
+        } else if (type == HAIROBB__REF_QOBB_PER_CHILD_MB) {   /* moving hair's nodes: the planes at time 1 follow */
+            node = bvh->nodes + (ref & ~(uint64_t)15);
+            bits = hairobb__intersect_compressed_obb_node(HAIROBB__CAST(const hairobb__compressed_obb_node *, node),
+                                                          HAIROBB__CAST(const signed char *, node) + sizeof(hairobb__compressed_obb_node), rs, dist);
+            child = HAIROBB__CAST(const hairobb__compressed_obb_node *, node)->child;
+        } else if (type == HAIROBB__REF_QAABB_MB || type == HAIROBB__REF_QOBB_MB) {
+            node = bvh->nodes + (ref & ~(uint64_t)15);
+            bits = hairobb__intersect_compressed_node(HAIROBB__CAST(const hairobb__compressed_node *, node), type == HAIROBB__REF_QOBB_MB,
+                                                      HAIROBB__CAST(const signed char *, node) + sizeof(hairobb__compressed_node), rs, dist);
+            child = HAIROBB__CAST(const hairobb__compressed_node *, node)->child;
         } else {
             node = bvh->nodes + (ref & ~(uint64_t)15);
             bits = hairobb__intersect_obb_node(HAIROBB__CAST(const hairobb__obb_node *, node), rs, dist);
