@@ -207,11 +207,18 @@
      `vertices` is then unused (may be NULL); the BVH keeps the T pointers
      (copied, 8 bytes each: the caller's array of them may go), and the
      arrays must stay alive as vertices do (MEMORY LIFETIME). Bezier input
-     only (another basis with T >= 2: INVALID_ARGUMENT). Every node bounds
-     its segments at every step (the interpolated control points lie in the
-     hull of the steps'), so one tree serves every time. T = 0 or 1 is a
-     static BVH (time_vertices unused), built and traced exactly as
-     without these fields; static BVHs ignore ray.time.
+     only (another basis with T >= 2: INVALID_ARGUMENT). One tree serves
+     every time. The compressed layouts (the default and
+     HAIROBB_OBB_COMPRESSED) store linear bounds: each child's boxes at
+     times 0 and 1, fitted to hold it at every step, lerped to the ray's
+     time (8-wide: 48 bytes more a node than the still compressed nodes,
+     which moving hair uses near the root too, where static hair has float
+     nodes). The float layouts bound each segment by
+     the union of its boxes at every step, which is loose for fast motion.
+     Motion that curves between many steps (a large rotation over T > 2)
+     bounds looser than the same motion in one step: no time splits yet.
+     T = 0 or 1 is a static BVH (time_vertices unused), built and traced
+     exactly as without these fields; static BVHs ignore ray.time.
      Errors: time_vertices NULL or a NULL step: INVALID_ARGUMENT; NaN,
      Inf, huge or negative radius at any step: INVALID_GEOMETRY. A ray of
      a motion-blurred BVH whose time is outside [0, 1] or NaN misses
