@@ -34,6 +34,9 @@
 typedef struct option_set {
     const char *name;
     void (*set)(hairobb_build_options *o);
+    int time_steps;                   /* motion blur: the scene's steps from scene_motion_steps */
+    scene_motion motion;
+    double amount;
 } option_set;
 
 static void set_default(hairobb_build_options *o) { (void)o; }
@@ -51,21 +54,26 @@ static void set_candidates4(hairobb_build_options *o) { o->hair_space_candidates
 static void set_catmull_rom(hairobb_build_options *o) { o->basis = HAIROBB_BASIS_CATMULL_ROM; }
 static void set_catmull_rom_no_copy(hairobb_build_options *o) { o->basis = HAIROBB_BASIS_CATMULL_ROM; o->bezier_copy = HAIROBB_OFF; }
 
+#define STILL(name, set) {name, set, 0, SCENE_MOTION_ROTATE, 0.0}
 static const option_set option_sets[] = {
-    {"default", set_default},
-    {"per-child", set_per_child},
-    {"shared-rotation", set_shared_rotation},
-    {"compressed", set_compressed},
-    {"aabb-only", set_aabb_only},
-    {"obb-only", set_obb_only},
-    {"spatial", set_spatial},
-    {"clustering", set_clustering},
-    {"spatial+clustering", set_spatial_clustering},
-    {"max-leaf-1", set_leaf1},
-    {"max-leaf-15", set_leaf15},
-    {"candidates-4", set_candidates4},
-    {"catmull-rom", set_catmull_rom},
-    {"catmull-rom-no-copy", set_catmull_rom_no_copy},
+    STILL("default", set_default),
+    STILL("per-child", set_per_child),
+    STILL("shared-rotation", set_shared_rotation),
+    STILL("compressed", set_compressed),
+    STILL("aabb-only", set_aabb_only),
+    STILL("obb-only", set_obb_only),
+    STILL("spatial", set_spatial),
+    STILL("clustering", set_clustering),
+    STILL("spatial+clustering", set_spatial_clustering),
+    STILL("max-leaf-1", set_leaf1),
+    STILL("max-leaf-15", set_leaf15),
+    STILL("candidates-4", set_candidates4),
+    STILL("catmull-rom", set_catmull_rom),
+    STILL("catmull-rom-no-copy", set_catmull_rom_no_copy),
+    {"motion-rotate-2", set_default, 2, SCENE_MOTION_ROTATE, 0.5},
+    {"motion-translate-4", set_default, 4, SCENE_MOTION_TRANSLATE, 0.05},
+    {"motion-rotate-3-spatial", set_spatial, 3, SCENE_MOTION_ROTATE, 0.5},
+    {"motion-compressed", set_compressed, 2, SCENE_MOTION_ROTATE, 0.5},
 };
 enum { OPTION_SETS = sizeof option_sets / sizeof option_sets[0] };
 
@@ -182,8 +190,15 @@ int main(int argc, char **argv)
             continue;
         }
         for (o = 0; o < OPTION_SETS; ++o) {
+            float *steps[4];
+            int time_steps = option_sets[o].time_steps;
             unsigned t;
             if (!listed(options, option_sets[o].name)) continue;
+            if (time_steps && scene_motion_steps(&s, option_sets[o].motion, option_sets[o].amount, time_steps, steps) != 0) {
+                printf("%s\t%s\tout of memory for the steps\n", s.name, option_sets[o].name);
+                ++failures;
+                continue;
+            }
             for (t = 1; t <= 16; ++t) {
                 char name[4];
                 hairobb_build_options opt;
@@ -197,7 +212,9 @@ int main(int argc, char **argv)
                 option_sets[o].set(&opt);
                 opt.threads = t;
                 opt.allocator_user = &meter;
-                r = hairobb_build(s.vertices, s.vertex_count, s.indices, s.segment_count, &opt, &bvh);
+                opt.time_steps = (unsigned)time_steps;
+                opt.time_vertices = (const float *const *)steps;
+                r = hairobb_build(time_steps ? NULL : s.vertices, s.vertex_count, s.indices, s.segment_count, &opt, &bvh);
                 if (r != HAIROBB_OK) {
                     printf("%s\t%s\t%u\tfailed: %s\n", s.name, option_sets[o].name, t, hairobb_result_string(r));
                     ++failures;
@@ -219,6 +236,7 @@ int main(int argc, char **argv)
                 }
                 alloc_meter_destroy(&meter);
             }
+            scene_motion_free(steps, time_steps);
         }
         scene_free(&s);
     }
