@@ -1625,6 +1625,7 @@ typedef struct hairobb__builder {
     const float *tangents;
     unsigned time_steps;              /* motion blur: >= 2 steps (vertices = the first), else 0 */
     const float *const *time_vertices;
+    int sah_mid_time;                 /* moving nodes (linear bounds): the SAH's boxes are at mid-time */
     uint32_t *ids;                    /* segment of each position */
     float *ranges;                    /* u0, u1 per position; NULL without spatial splits: all [0, 1] */
     float *world_boxes;               /* 6 per position: lower, upper */
@@ -1742,13 +1743,37 @@ static void hairobb__ref_box_steps(const hairobb__builder *b, size_t i, const ha
     }
 }
 
+/* The box of a moving reference at mid-time (the middle step, or halfway
+   between the two around it), what the SAH bins where nodes store linear
+   bounds: their boxes follow the hair at each time, so their area is
+   about the box at one time, not the sweep's. Never a bound. */
+static void hairobb__ref_box_mid(const hairobb__builder *b, size_t i, const hairobb__frame_prep *f, const float *centre,
+                                 const float *row_norms, hairobb__b4 *lower, hairobb__b4 *upper)
+{
+    unsigned k = (b->time_steps - 1) / 2;
+    float first[16], second[16], mid[16];
+    const float *p = hairobb__ref_points_in(b, b->time_vertices[k], i, first);
+    if (b->time_steps % 2 == 0) {
+        const float *q = hairobb__ref_points_in(b, b->time_vertices[k + 1], i, second);
+        int j;
+        for (j = 0; j < 16; ++j) mid[j] = 0.5f * p[j] + 0.5f * q[j];
+        p = mid;
+    }
+    hairobb__segment_box_v4(p, f, centre, row_norms, lower, upper);
+}
+
 /* Box of the reference at position i in frame f (hairobb__segment_box_v4's
-   arguments), over every time step of moving hair: every box the builder
-   and the refit compute comes from here. */
+   arguments), over every time step of moving hair, or at mid-time for the
+   SAH of linear bounds (sah_mid_time): every box the builder and the refit
+   compute comes from here, but a moving node's (hairobb__node_box_ends). */
 HAIROBB__INLINE void hairobb__ref_box_v4(const hairobb__builder *b, size_t i, const hairobb__frame_prep *f, const float *centre,
                                          const float *row_norms, hairobb__b4 *lower, hairobb__b4 *upper)
 {
     float scratch[16];
+    if (b->sah_mid_time) {
+        hairobb__ref_box_mid(b, i, f, centre, row_norms, lower, upper);
+        return;
+    }
     hairobb__segment_box_v4(hairobb__ref_points(b, i, scratch), f, centre, row_norms, lower, upper);
     if (b->time_steps) hairobb__ref_box_steps(b, i, f, centre, row_norms, lower, upper);
 }
@@ -3396,6 +3421,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     b.indices = indices;
     b.time_steps = steps;
     b.time_vertices = opt.time_vertices;
+    b.sah_mid_time = steps && (opt.obb_layout == HAIROBB_OBB_COMPRESSED || opt.obb_layout == HAIROBB_OBB_COMPRESSED_PER_CHILD);
     b.user = opt.allocator_user;
     b.policy = opt.nodes;
     b.obb_layout = opt.obb_layout;
@@ -3452,6 +3478,22 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
         b.ids[i] = (uint32_t)i;
         hairobb__set_range(&b, i, 0.0f, 1.0f);
         hairobb__box_grow(bvh->lower, bvh->upper, b.world_boxes + 6 * i, b.world_boxes + 6 * i + 3);
+    }
+    if (b.sah_mid_time) {   /* the bounds hold every step: the boxes above are at mid-time */
+        hairobb__frame_prep world;
+        float identity[9];
+        hairobb__identity_frame(identity);
+        hairobb__prepare_frame(identity, &world);
+        hairobb__box_empty(bvh->lower, bvh->upper);
+        for (i = 0; i < segment_count; ++i) {
+            hairobb__b4 lo, hi;
+            float lower[3], upper[3];
+            hairobb__segment_box_v4(b.vertices + 4 * (size_t)b.indices[i], &world, NULL, NULL, &lo, &hi);
+            hairobb__ref_box_steps(&b, i, &world, NULL, NULL, &lo, &hi);
+            hairobb__b4_store3(lower, lo);
+            hairobb__b4_store3(upper, hi);
+            hairobb__box_grow(bvh->lower, bvh->upper, lower, upper);
+        }
     }
     root.begin = 0; root.end = segment_count; root.cap = b.capacity;
     memset(&tries, 0, sizeof tries);
