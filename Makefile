@@ -66,7 +66,7 @@ $(B)/test_refit_w4: tests/test_refit.c hairobb.h tests/reference.h tests/scenes.
 	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=4 $< -o $@ $(LIBS)
 
 # motion blur: moving fur at random ray times against the reference, errors, refit, save/load
-$(B)/test_motion: tests/test_motion.c hairobb.h tests/reference.h tests/test_data.h tests/check.h | $(B)
+$(B)/test_motion: tests/test_motion.c hairobb.h tests/reference.h tests/ref_bases.h tests/test_data.h tests/check.h | $(B)
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS) -lpthread
 
 # black-box: every combination of build options against the reference
@@ -142,7 +142,7 @@ $(B)/test_conservative: tests/test_conservative.c hairobb.h tests/reference.h te
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
 
 # curve bases against Embree's flat curves of each basis and the reference
-$(B)/test_bases: tests/test_bases.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
+$(B)/test_bases: tests/test_bases.c hairobb.h tests/reference.h tests/ref_bases.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
 
 # the any-hit filter against the reference

@@ -206,19 +206,21 @@
      linearly, in float, between the two steps around tau. hairobb_build's
      `vertices` is then unused (may be NULL); the BVH keeps the T pointers
      (copied, 8 bytes each: the caller's array of them may go), and the
-     arrays must stay alive as vertices do (MEMORY LIFETIME). Bezier input
-     only (another basis with T >= 2: INVALID_ARGUMENT). One tree serves
-     every time. The compressed layouts (the default and
-     HAIROBB_OBB_COMPRESSED) store linear bounds: each child's boxes at
+     arrays must stay alive as vertices do (MEMORY LIFETIME). Any basis but
+     Hermite (its tangents would have to move too: INVALID_ARGUMENT);
+     another basis moves as its points: they are interpolated, then
+     converted, read where they are (bezier_copy does not apply to moving
+     hair). One tree serves every time. The compressed layouts (the default
+     and HAIROBB_OBB_COMPRESSED) store linear bounds: each child's boxes at
      times 0 and 1, fitted to hold it at every step, lerped to the ray's
      time (8-wide: 48 bytes more a node than the still compressed nodes,
      which moving hair uses near the root too, where static hair has float
-     nodes). The float layouts bound each segment by
-     the union of its boxes at every step, which is loose for fast motion.
-     Motion that curves between many steps (a large rotation over T > 2)
-     bounds looser than the same motion in one step: no time splits yet.
-     T = 0 or 1 is a static BVH (time_vertices unused), built and traced
-     exactly as without these fields; static BVHs ignore ray.time.
+     nodes). The float layouts bound each segment by the union of its boxes
+     at every step, which is loose for fast motion. Motion that curves
+     between many steps (a large rotation over T > 2) bounds looser than the
+     same motion in one step: no time splits yet. T = 0 or 1 is a static BVH
+     (time_vertices unused), built and traced exactly as without these
+     fields; static BVHs ignore ray.time.
      Errors: time_vertices NULL or a NULL step: INVALID_ARGUMENT; NaN,
      Inf, huge or negative radius at any step: INVALID_GEOMETRY. A ray of
      a motion-blurred BVH whose time is outside [0, 1] or NaN misses
@@ -1041,7 +1043,7 @@ static hairobb_result hairobb__choose_simd(hairobb_simd requested, hairobb_simd 
 }
 
 /* Control points a segment of the basis reads from indices[i] on. */
-static size_t hairobb__basis_points(hairobb_basis basis)
+HAIROBB__INLINE size_t hairobb__basis_points(hairobb_basis basis)
 {
     return basis == HAIROBB_BASIS_HERMITE || basis == HAIROBB_BASIS_LINEAR ? 2 : 4;
 }
@@ -1089,11 +1091,12 @@ static hairobb_result hairobb__validate_motion(const hairobb_build_options *opt,
     unsigned k;
     *steps = 0;
     if (opt->time_steps < 2) return HAIROBB_OK;
-    if (!opt->time_vertices || opt->basis != HAIROBB_BASIS_BEZIER || opt->time_steps > 0xffffu) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    if (!opt->time_vertices || opt->basis == HAIROBB_BASIS_HERMITE || opt->time_steps > 0xffffu) return HAIROBB_ERROR_INVALID_ARGUMENT;
     for (k = 0; k < opt->time_steps; ++k)
         if (!opt->time_vertices[k]) return HAIROBB_ERROR_INVALID_ARGUMENT;
     for (k = 0; k < opt->time_steps; ++k) {
-        hairobb_result result = hairobb__validate(opt->time_vertices[k], vertex_count, indices, segment_count, 4, NULL);
+        hairobb_result result = hairobb__validate(opt->time_vertices[k], vertex_count, indices, segment_count,
+                                                  hairobb__basis_points(opt->basis), NULL);
         if (result != HAIROBB_OK) return result;
     }
     *vertices = opt->time_vertices[0];
@@ -3460,7 +3463,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     }
     bvh->vertex_count = vertex_count;
     bvh->source_indices = indices;
-    if (opt.basis != HAIROBB_BASIS_BEZIER && opt.bezier_copy != HAIROBB_OFF) {
+    if (opt.basis != HAIROBB_BASIS_BEZIER && opt.bezier_copy != HAIROBB_OFF && !steps) {
         float *curves = hairobb__convert_curves(opt.basis, vertices, indices, opt.tangents, segment_count, b.user);
         if (!curves) goto failed;
         bvh->curves = curves;
@@ -3488,7 +3491,8 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
         for (i = 0; i < segment_count; ++i) {
             hairobb__b4 lo, hi;
             float lower[3], upper[3];
-            hairobb__segment_box_v4(b.vertices + 4 * (size_t)b.indices[i], &world, NULL, NULL, &lo, &hi);
+            float scratch[16];
+            hairobb__segment_box_v4(hairobb__ref_points(&b, i, scratch), &world, NULL, NULL, &lo, &hi);
             hairobb__ref_box_steps(&b, i, &world, NULL, NULL, &lo, &hi);
             hairobb__b4_store3(lower, lo);
             hairobb__b4_store3(upper, hi);
@@ -3912,8 +3916,7 @@ static void hairobb__refit_tree(hairobb_bvh *bvh)
             unsigned step;
             for (step = 0; step < (bvh->time_steps ? bvh->time_steps : 1u); ++step) {   /* every step's */
                 float lo[3], hi[3], scratch[16];
-                /* motion blur is Bezier input: its steps are read in place */
-                const float *cp = bvh->time_steps ? bvh->time_vertices[step] + 4 * (size_t)bvh->indices[k]
+                const float *cp = bvh->time_steps ? hairobb__builder_points(&f.b, bvh->time_vertices[step], (uint32_t)k, scratch)
                                                   : hairobb__segment_points(bvh, (uint32_t)k, 0.0f, scratch);
                 hairobb__segment_box_prep(cp, &f.world, NULL, NULL, lo, hi);
                 hairobb__box_grow(lower, upper, lo, hi);
@@ -3959,6 +3962,7 @@ HAIROBB_DEF hairobb_result hairobb_refit_motion(hairobb_bvh *bvh, const float *c
     memset(&opt, 0, sizeof opt);
     opt.time_steps = bvh->time_steps;
     opt.time_vertices = time_vertices;
+    opt.basis = bvh->basis;
     /* all checked before anything is written: on an error the BVH traces the old positions */
     result = hairobb__validate_motion(&opt, bvh->vertex_count, bvh->indices, bvh->segment_count, &vertices, &steps);
     if (result != HAIROBB_OK) return result;
@@ -4053,7 +4057,7 @@ static uint64_t hairobb__save_checksum(const unsigned char *saved, size_t size)
    the converted curves' 4 a segment (the hash covers what is traced). */
 static size_t hairobb__traced_vertex_count(const hairobb_bvh *bvh)
 {
-    return bvh->basis != HAIROBB_BASIS_BEZIER ? 4 * bvh->segment_count : bvh->vertex_count;
+    return bvh->basis != HAIROBB_BASIS_BEZIER && !bvh->time_steps ? 4 * bvh->segment_count : bvh->vertex_count;
 }
 
 static uint64_t hairobb__hair_hash(const float *vertices, size_t vertex_count, const uint32_t *indices, size_t segment_count)
@@ -4063,8 +4067,8 @@ static uint64_t hairobb__hair_hash(const float *vertices, size_t vertex_count, c
     return hairobb__hash(h, indices, sizeof(uint32_t) * segment_count);
 }
 
-/* hairobb__hair_hash of the Bezier segments a BVH traces, and for motion
-   blur (Bezier input) every step's array after the first's. Without the
+/* hairobb__hair_hash of the Bezier segments a BVH traces, or for motion
+   blur of the caller's arrays (any basis), every step's. Without the
    copy each segment is converted as it is hashed: the same bytes
    hairobb__hash reads from the copy (two of its 32-byte blocks a segment,
    then the indices 4 i), so a BVH saved with the copy loads without it and
@@ -4075,7 +4079,7 @@ static uint64_t hairobb__traced_hash(const hairobb_bvh *bvh)
     uint64_t lane[4], word[4], h;
     uint32_t ix[8];
     int k, j;
-    if (bvh->point_basis == HAIROBB_BASIS_BEZIER) {
+    if (bvh->point_basis == HAIROBB_BASIS_BEZIER || bvh->time_steps) {   /* the arrays as they are */
         size_t vertex_count = hairobb__traced_vertex_count(bvh);
         h = hairobb__hair_hash(bvh->vertices, vertex_count, bvh->indices, n);
         for (k = 1; k < (int)bvh->time_steps; ++k) h = hairobb__hash(h, bvh->time_vertices[k], 4 * sizeof(float) * vertex_count);
@@ -4310,7 +4314,7 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
         if (!(lo <= hi) || !(fabsf(lo) <= FLT_MAX) || !(fabsf(hi) <= FLT_MAX)) return HAIROBB_ERROR_INVALID_FILE;
     }
     saved_steps = hairobb__get32(in + HAIROBB__AT_TIME_STEPS);
-    if (saved_steps == 1 || saved_steps > 0xffffu || (saved_steps && basis != HAIROBB_BASIS_BEZIER)) return HAIROBB_ERROR_INVALID_FILE;
+    if (saved_steps == 1 || saved_steps > 0xffffu || (saved_steps && basis == HAIROBB_BASIS_HERMITE)) return HAIROBB_ERROR_INVALID_FILE;
     if (basis != (uint32_t)opt.basis || saved_segments != (uint64_t)segment_count ||
         saved_steps != (opt.time_steps < 2 ? 0u : opt.time_steps))
         return HAIROBB_ERROR_MISMATCH;
@@ -4337,7 +4341,7 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
         if (!bvh->time_vertices) goto failed;
         bvh->time_steps = steps;
     }
-    if (opt.basis != HAIROBB_BASIS_BEZIER && opt.bezier_copy != HAIROBB_OFF) {
+    if (opt.basis != HAIROBB_BASIS_BEZIER && opt.bezier_copy != HAIROBB_OFF && !steps) {
         float *curves = hairobb__convert_curves(opt.basis, vertices, indices, opt.tangents, segment_count, user);
         if (!curves) goto failed;
         bvh->curves = curves;
@@ -4861,7 +4865,7 @@ static const float *hairobb__made_points(const hairobb_bvh *bvh, uint32_t prim, 
 {
     size_t at = 4 * (size_t)bvh->indices[prim];
     if (bvh->time_steps) {
-        float f = time * (float)(bvh->time_steps - 1), w;
+        float f = time * (float)(bvh->time_steps - 1), w, lerped[16];
         unsigned k = (unsigned)f;
         const float *a, *b;
         int j;
@@ -4869,7 +4873,13 @@ static const float *hairobb__made_points(const hairobb_bvh *bvh, uint32_t prim, 
         w = f - (float)k;
         a = bvh->time_vertices[k] + at;
         b = bvh->time_vertices[k + 1] + at;
-        for (j = 0; j < 16; ++j) scratch[j] = (1.0f - w) * a[j] + w * b[j];
+        if (bvh->point_basis == HAIROBB_BASIS_BEZIER) {
+            for (j = 0; j < 16; ++j) scratch[j] = (1.0f - w) * a[j] + w * b[j];
+            return scratch;
+        }
+        /* another basis: its points lerped, then converted (linear: 2 points) */
+        for (j = 0; j < 4 * (int)hairobb__basis_points(bvh->point_basis); ++j) lerped[j] = (1.0f - w) * a[j] + w * b[j];
+        hairobb__to_bezier(bvh->point_basis, lerped, NULL, scratch);
         return scratch;
     }
     hairobb__to_bezier(bvh->point_basis, bvh->vertices + at, bvh->tangents ? bvh->tangents + at : NULL, scratch);

@@ -14,6 +14,7 @@
 #include "check.h"
 #include "embree_wrap.h"
 #include "reference.h"
+#include "ref_bases.h"
 #include "scenes.h"
 
 #include <stdlib.h>
@@ -84,31 +85,6 @@ static uint32_t *make_indices(hairobb_basis basis, size_t *count)
     return indices;
 }
 
-/* Bezier control points of one segment, in double from the basis matrix
-   (rows: Bezier points; columns: the basis' points), then rounded. */
-static void reference_bezier(hairobb_basis basis, const float *p, const float *t, float out[16])
-{
-    static const double bspline[4][4] = {{1 / 6.0, 4 / 6.0, 1 / 6.0, 0}, {0, 4 / 6.0, 2 / 6.0, 0}, {0, 2 / 6.0, 4 / 6.0, 0},
-                                         {0, 1 / 6.0, 4 / 6.0, 1 / 6.0}};
-    static const double catmull_rom[4][4] = {{0, 1, 0, 0}, {-1 / 6.0, 1, 1 / 6.0, 0}, {0, 1 / 6.0, 1, -1 / 6.0}, {0, 0, 1, 0}};
-    static const double linear[4][2] = {{1, 0}, {2 / 3.0, 1 / 3.0}, {1 / 3.0, 2 / 3.0}, {0, 1}};
-    int row, col, c;
-    for (row = 0; row < 4; ++row) {
-        for (c = 0; c < 4; ++c) {
-            double v = 0.0;
-            if (basis == HAIROBB_BASIS_BSPLINE || basis == HAIROBB_BASIS_CATMULL_ROM) {
-                for (col = 0; col < 4; ++col)
-                    v += (basis == HAIROBB_BASIS_BSPLINE ? bspline : catmull_rom)[row][col] * (double)p[4 * col + c];
-            } else if (basis == HAIROBB_BASIS_LINEAR) {
-                v = linear[row][0] * (double)p[c] + linear[row][1] * (double)p[4 + c];
-            } else { /* Hermite: P0, P0 + T0/3, P1 - T1/3, P1 */
-                v = row == 0 ? p[c] : row == 1 ? (double)p[c] + t[c] / 3.0 : row == 2 ? (double)p[4 + c] - t[4 + c] / 3.0 : p[4 + c];
-            }
-            out[4 * row + c] = (float)(c == 3 && v < 0.0 ? 0.0 : v);
-        }
-    }
-}
-
 static void check_basis(hairobb_basis basis, const strands *st)
 {
     size_t segments, i, rays = (size_t)SIDE * SIDE, hits = 0, disagree = 0, edge = 0, t_bad = 0, emb_disagree = 0;
@@ -125,7 +101,7 @@ static void check_basis(hairobb_basis basis, const strands *st)
     const char *name = basis_names[basis];
 
     for (i = 0; i < segments; ++i) {
-        reference_bezier(basis, st->points + 4 * (size_t)indices[i], tangents ? tangents + 4 * (size_t)indices[i] : NULL,
+        ref_bezier_from_basis(basis, st->points + 4 * (size_t)indices[i], tangents ? tangents + 4 * (size_t)indices[i] : NULL,
                          bezier + 16 * i);
         bezier_indices[i] = (uint32_t)(4 * i);
     }
