@@ -1746,16 +1746,23 @@ static void hairobb__ref_box_steps(const hairobb__builder *b, size_t i, const ha
     }
 }
 
-/* The box of a moving reference at mid-time (the middle step, or halfway
-   between the two around it), what the SAH bins where nodes store linear
-   bounds: their boxes follow the hair at each time, so their area is
-   about the box at one time, not the sweep's. Never a bound. */
-static void hairobb__ref_box_mid(const hairobb__builder *b, size_t i, const hairobb__frame_prep *f, const float *centre,
-                                 const float *row_norms, hairobb__b4 *lower, hairobb__b4 *upper)
+/* The box of a moving reference: over every step (the union), or at
+   mid-time (the middle step, or halfway between the two around it) for
+   the SAH where nodes store linear bounds, whose boxes follow the hair at
+   each time, so that their area is about the box at one time, not the
+   sweep's (then never a bound). */
+static void hairobb__ref_box_moving(const hairobb__builder *b, size_t i, const hairobb__frame_prep *f, const float *centre,
+                                    const float *row_norms, hairobb__b4 *lower, hairobb__b4 *upper)
 {
     unsigned k = (b->time_steps - 1) / 2;
     float first[16], second[16], mid[16];
-    const float *p = hairobb__ref_points_in(b, b->time_vertices[k], i, first);
+    const float *p;
+    if (!b->sah_mid_time) {
+        hairobb__segment_box_v4(hairobb__ref_points(b, i, first), f, centre, row_norms, lower, upper);
+        hairobb__ref_box_steps(b, i, f, centre, row_norms, lower, upper);
+        return;
+    }
+    p = hairobb__ref_points_in(b, b->time_vertices[k], i, first);
     if (b->time_steps % 2 == 0) {
         const float *q = hairobb__ref_points_in(b, b->time_vertices[k + 1], i, second);
         int j;
@@ -1773,12 +1780,11 @@ HAIROBB__INLINE void hairobb__ref_box_v4(const hairobb__builder *b, size_t i, co
                                          const float *row_norms, hairobb__b4 *lower, hairobb__b4 *upper)
 {
     float scratch[16];
-    if (b->sah_mid_time) {
-        hairobb__ref_box_mid(b, i, f, centre, row_norms, lower, upper);
+    if (b->time_steps) {
+        hairobb__ref_box_moving(b, i, f, centre, row_norms, lower, upper);
         return;
     }
     hairobb__segment_box_v4(hairobb__ref_points(b, i, scratch), f, centre, row_norms, lower, upper);
-    if (b->time_steps) hairobb__ref_box_steps(b, i, f, centre, row_norms, lower, upper);
 }
 
 HAIROBB__INLINE void hairobb__ref_box(const hairobb__builder *b, size_t i, const hairobb__frame_prep *f, const float *centre,
