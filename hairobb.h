@@ -4872,19 +4872,23 @@ static const float *hairobb__made_points(const hairobb_bvh *bvh, uint32_t prim, 
     size_t at = 4 * (size_t)bvh->indices[prim];
     if (bvh->time_steps) {
         float f = time * (float)(bvh->time_steps - 1), w, lerped[16];
+        float *out = bvh->point_basis == HAIROBB_BASIS_BEZIER ? scratch : lerped;
         unsigned k = (unsigned)f;
         const float *a, *b;
-        int j;
+        int j, points = (int)hairobb__basis_points(bvh->point_basis);
+        hairobb__v4 wa, wb;
         if (k > bvh->time_steps - 2) k = bvh->time_steps - 2;
         w = f - (float)k;
+        wa = hairobb__v4_set1(1.0f - w);
+        wb = hairobb__v4_set1(w);
         a = bvh->time_vertices[k] + at;
         b = bvh->time_vertices[k + 1] + at;
-        if (bvh->point_basis == HAIROBB_BASIS_BEZIER) {
-            for (j = 0; j < 16; ++j) scratch[j] = (1.0f - w) * a[j] + w * b[j];
-            return scratch;
-        }
+        /* each point (x y z r) lerped: (1 - w) a + w b, as the plain twin rounds it */
+        for (j = 0; j < points; ++j)
+            hairobb__v4_store(out + 4 * j, hairobb__v4_add(hairobb__v4_mul(wa, hairobb__v4_load(a + 4 * j)),
+                                                            hairobb__v4_mul(wb, hairobb__v4_load(b + 4 * j))));
+        if (out == scratch) return scratch;
         /* another basis: its points lerped, then converted (linear: 2 points) */
-        for (j = 0; j < 4 * (int)hairobb__basis_points(bvh->point_basis); ++j) lerped[j] = (1.0f - w) * a[j] + w * b[j];
         hairobb__to_bezier(bvh->point_basis, lerped, NULL, scratch);
         return scratch;
     }
