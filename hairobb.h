@@ -3647,9 +3647,10 @@ static float hairobb__child_area(const unsigned char *node_memory, unsigned type
         const float *step, *frame;
         const signed char *planes;
         if (HAIROBB__STILL_TYPE(type) == HAIROBB__REF_QOBB_PER_CHILD) {
+            /* this lane's rotation, decoded as hairobb__node_frames decodes it */
             const hairobb__compressed_obb_node *node = HAIROBB__CAST(const hairobb__compressed_obb_node *, (const void *)node_memory);
-            hairobb__node_frames(node_memory, type, lane + 1, frames);
-            frame = frames[lane];
+            for (k = 0; k < 9; ++k) frames[0][k] = (float)node->rotation[k][lane];
+            frame = frames[0];
             step = node->step; planes = node->lower[0];
         } else {
             const hairobb__compressed_node *node = HAIROBB__CAST(const hairobb__compressed_node *, (const void *)node_memory);
