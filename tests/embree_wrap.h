@@ -82,17 +82,13 @@ static inline void emb_free(emb_scene *e)
     free(e);
 }
 
-/* Builds an Embree scene over the caller's buffers (shared, not copied).
-   type: EMB_*; tangents: for EMB_FLAT_HERMITE only; tessellation_rate: 0 = Embree's
-   default, else rtcSetGeometryTessellationRate (flat curves); threads: 0 =
-   all cores, else "threads=N". Build quality medium (Embree's default), no
-   scene flags. memory_bytes (optional) = bytes Embree allocated during
-   rtcCommitScene, net of what it freed; build_seconds (optional) = wall time
-   of rtcCommitScene. Returns NULL on failure, after Embree's message has been
-   printed to stderr. */
-static inline emb_scene *emb_build_curves(const float *vertices, size_t vertex_count, const uint32_t *indices,
-                                          size_t segment_count, int type, const float *tangents, int tessellation_rate,
-                                          int threads, size_t *memory_bytes, double *build_seconds)
+/* emb_build_curves and emb_build_curves_motion: vertex buffer k (slot k)
+   shares time_vertices[k], k < time_steps; time_steps >= 2 sets the
+   geometry's time step count (motion blur), 1 builds static curves. */
+static inline emb_scene *emb__build_curve_steps(const float *const *time_vertices, unsigned time_steps,
+                                                size_t vertex_count, const uint32_t *indices, size_t segment_count,
+                                                int type, const float *tangents, int tessellation_rate, int threads,
+                                                size_t *memory_bytes, double *build_seconds)
 {
     static const enum RTCGeometryType types[] = {
         RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE, RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE, RTC_GEOMETRY_TYPE_FLAT_BSPLINE_CURVE,
@@ -103,6 +99,10 @@ static inline emb_scene *emb_build_curves(const float *vertices, size_t vertex_c
         *build_seconds = 0.0;
     if (type < 0 || type > EMB_FLAT_LINEAR || (type == EMB_FLAT_HERMITE) != (tangents != NULL)) {
         fprintf(stderr, "emb_build: unknown curve type %d (or tangents for the wrong type)\n", type);
+        return NULL;
+    }
+    if (time_steps < 1 || (time_steps > 1 && tangents)) {
+        fprintf(stderr, "emb_build: %u time steps (moving curves take no tangents)\n", time_steps);
         return NULL;
     }
     enum RTCGeometryType geometry_type = types[type];
@@ -131,9 +131,12 @@ static inline emb_scene *emb_build_curves(const float *vertices, size_t vertex_c
         emb_free(e);
         return NULL;
     }
+    if (time_steps > 1)
+        rtcSetGeometryTimeStepCount(geometry, time_steps);
     /* Embree only reads shared buffers; its API is not const-qualified. */
-    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, (void *)vertices, 0,
-                               4 * sizeof(float), vertex_count);
+    for (unsigned k = 0; k < time_steps; k++)
+        rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, k, RTC_FORMAT_FLOAT4, (void *)time_vertices[k], 0,
+                                   4 * sizeof(float), vertex_count);
     rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, (void *)indices, 0,
                                sizeof(uint32_t), segment_count);
     if (tangents)
@@ -162,6 +165,40 @@ static inline emb_scene *emb_build_curves(const float *vertices, size_t vertex_c
     return e;
 }
 
+/* Builds an Embree scene over the caller's buffers (shared, not copied).
+   type: EMB_*; tangents: for EMB_FLAT_HERMITE only; tessellation_rate: 0 = Embree's
+   default, else rtcSetGeometryTessellationRate (flat curves); threads: 0 =
+   all cores, else "threads=N". Build quality medium (Embree's default), no
+   scene flags. memory_bytes (optional) = bytes Embree allocated during
+   rtcCommitScene, net of what it freed; build_seconds (optional) = wall time
+   of rtcCommitScene. Returns NULL on failure, after Embree's message has been
+   printed to stderr. */
+static inline emb_scene *emb_build_curves(const float *vertices, size_t vertex_count, const uint32_t *indices,
+                                          size_t segment_count, int type, const float *tangents, int tessellation_rate,
+                                          int threads, size_t *memory_bytes, double *build_seconds)
+{
+    return emb__build_curve_steps(&vertices, 1, vertex_count, indices, segment_count, type, tangents,
+                                  tessellation_rate, threads, memory_bytes, build_seconds);
+}
+
+/* Moving curves (motion blur), as emb_build_curves without tangents: the
+   hair at time_steps >= 2 times k / (time_steps - 1), step k in
+   time_vertices[k] (vertex_count points each, the same indices), through
+   rtcSetGeometryTimeStepCount and one shared vertex buffer per step; rays
+   carry their time (emb_intersect_at_time, emb_occluded_at_time). */
+static inline emb_scene *emb_build_curves_motion(const float *const *time_vertices, unsigned time_steps,
+                                                 size_t vertex_count, const uint32_t *indices, size_t segment_count,
+                                                 int type, int tessellation_rate, int threads, size_t *memory_bytes,
+                                                 double *build_seconds)
+{
+    if (time_steps < 2) {
+        fprintf(stderr, "emb_build_curves_motion: %u time steps (at least 2)\n", time_steps);
+        return NULL;
+    }
+    return emb__build_curve_steps(time_vertices, time_steps, vertex_count, indices, segment_count, type, NULL,
+                                  tessellation_rate, threads, memory_bytes, build_seconds);
+}
+
 /* Bezier curves (flat or round): emb_build_curves without tangents. */
 static inline emb_scene *emb_build(const float *vertices, size_t vertex_count, const uint32_t *indices,
                                    size_t segment_count, int type, int tessellation_rate, int threads,
@@ -187,13 +224,15 @@ static inline void emb_init_ray(struct RTCRay *ray, const float org[3], float tn
     ray->flags = 0;
 }
 
-/* Closest hit in [tnear, tfar]: returns 1 and fills t, u (curve parameter),
-   v and prim (segment index), any of which may be NULL; 0 on a miss. */
-static inline int emb_intersect(const emb_scene *e, const float org[3], float tnear, const float dir[3], float tfar,
-                                float *t, float *u, float *v, uint32_t *prim)
+/* Closest hit in [tnear, tfar] of a ray at `time` (in [0, 1]; read by
+   moving curves only): returns 1 and fills t, u (curve parameter), v and
+   prim (segment index), any of which may be NULL; 0 on a miss. */
+static inline int emb_intersect_at_time(const emb_scene *e, const float org[3], float tnear, const float dir[3],
+                                        float tfar, float time, float *t, float *u, float *v, uint32_t *prim)
 {
     struct RTCRayHit ray_hit;
     emb_init_ray(&ray_hit.ray, org, tnear, dir, tfar);
+    ray_hit.ray.time = time;
     ray_hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     ray_hit.hit.primID = RTC_INVALID_GEOMETRY_ID;
     ray_hit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
@@ -213,16 +252,31 @@ static inline int emb_intersect(const emb_scene *e, const float org[3], float tn
     return 1;
 }
 
-/* Any hit in [tnear, tfar]: 1 if occluded, else 0. */
-static inline int emb_occluded(const emb_scene *e, const float org[3], float tnear, const float dir[3], float tfar)
+/* emb_intersect_at_time at time 0. */
+static inline int emb_intersect(const emb_scene *e, const float org[3], float tnear, const float dir[3], float tfar,
+                                float *t, float *u, float *v, uint32_t *prim)
+{
+    return emb_intersect_at_time(e, org, tnear, dir, tfar, 0.0f, t, u, v, prim);
+}
+
+/* Any hit in [tnear, tfar] of a ray at `time`: 1 if occluded, else 0. */
+static inline int emb_occluded_at_time(const emb_scene *e, const float org[3], float tnear, const float dir[3],
+                                       float tfar, float time)
 {
     struct RTCRay ray;
     emb_init_ray(&ray, org, tnear, dir, tfar);
+    ray.time = time;
     struct RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     rtcOccluded1(e->scene, &context, &ray);
     /* Embree marks an occluded ray by setting tfar to -inf */
     return ray.tfar < 0.0f;
+}
+
+/* emb_occluded_at_time at time 0. */
+static inline int emb_occluded(const emb_scene *e, const float org[3], float tnear, const float dir[3], float tfar)
+{
+    return emb_occluded_at_time(e, org, tnear, dir, tfar, 0.0f);
 }
 
 #endif /* HAIROBB_TESTS_EMBREE_WRAP_H */

@@ -725,4 +725,34 @@ static inline size_t ref_all_hits(const ref_scene *s, const float org[3], const 
     return count;
 }
 
+/* ------------------------------------------------------------------------ */
+/* Motion blur                                                              */
+/* ------------------------------------------------------------------------ */
+
+/* Moving hair given at time_steps >= 1 times k / (time_steps - 1), every
+ * step the same layout: floats [first, first + count) of it at `time` in
+ * [0, 1], lerped in double between the two steps around time and rounded
+ * to float into out (the float control points the reference then reads).
+ * The pair and the weight come from time * (time_steps - 1) rounded to
+ * float, as a float ray time scales; time_steps 1: a copy. */
+static inline void ref_motion_points(const float *const *steps, int time_steps, float time, size_t first,
+                                     size_t count, float *out)
+{
+    double f, w;
+    int k;
+    size_t j;
+    if (time_steps < 2) {
+        for (j = 0; j < count; ++j)
+            out[j] = steps[0][first + j];
+        return;
+    }
+    f = time * (float)(time_steps - 1);
+    k = (int)f;
+    if (k > time_steps - 2)
+        k = time_steps - 2;
+    w = f - k;
+    for (j = 0; j < count; ++j)
+        out[j] = (float)((1.0 - w) * (double)steps[k][first + j] + w * (double)steps[k + 1][first + j]);
+}
+
 #endif /* HAIROBB_TESTS_REFERENCE_H */

@@ -50,17 +50,13 @@ static void make_step(float *v, uint32_t *idx, int k, int T, int rotate)
 static int ref_trace_basis(hairobb_basis basis, float *const *steps, int T, const uint32_t *idx, const float org[3],
                            const float dir[3], float time, ref_hit *best)
 {
-    double f = time * (T - 1), w;
-    int k = (int)f, found = 0, points = basis == HAIROBB_BASIS_LINEAR ? 2 : 4;
-    uint32_t i, j;
+    int found = 0, points = basis == HAIROBB_BASIS_LINEAR ? 2 : 4;
+    uint32_t i;
     float lerped[16], cp[16];
     static const uint32_t zero[1] = {0};
-    if (k > T - 2) k = T - 2;
-    w = f - k;
     for (i = 0; i < NS; ++i) {
         ref_hit h;
-        for (j = 0; j < 4 * (uint32_t)points; ++j)
-            lerped[j] = (float)((1.0 - w) * (double)steps[k][4 * idx[i] + j] + w * (double)steps[k + 1][4 * idx[i] + j]);
+        ref_motion_points((const float *const *)steps, T, time, 4 * (size_t)idx[i], 4 * (size_t)points, lerped);
         if (basis == HAIROBB_BASIS_BEZIER) memcpy(cp, lerped, sizeof cp);
         else ref_bezier_from_basis(basis, lerped, NULL, cp);
         if (ref_intersect_segment(cp, zero, 0, org, dir, 0.0, found ? best->t : INFINITY, &h) && (!found || h.t < best->t)) {
