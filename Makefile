@@ -179,6 +179,9 @@ TREE_HASH_FLAGS_tree_hash_w4    = -DHAIROBB_NODE_WIDTH=4
 TREE_HASH_FLAGS_tree_hash_plain = -DHAIROBB_NO_SIMD
 $(B)/tree_hash $(B)/tree_hash_w4 $(B)/tree_hash_plain: bench/tree_hash.c bench/alloc_meter.h hairobb.h tests/scenes.h tests/test_data.h | $(B)
 	$(CC) $(BASE) $(ARCH) $(TREE_HASH_FLAGS_$(@F)) $< -o $@ $(LIBS)
+# instructions a ray of moving hair under callgrind (bench/motion_cost.c)
+$(B)/motion_cost: bench/motion_cost.c hairobb.h tests/scenes.h | $(B)
+	$(CC) $(BASE) $< -o $@ $(LIBS)
 tree-hashes: $(B)/tree_hash $(B)/tree_hash_w4 $(B)/tree_hash_plain
 	@for p in tree_hash tree_hash_w4 tree_hash_plain; do echo "== $$p"; $(B)/$$p || exit 1; done > $(B)/tree-hashes.txt
 	@echo "tree hashes: $(B)/tree-hashes.txt"
@@ -203,7 +206,7 @@ compile-matrix: | $(B)
 $(B)/check_dispatch_calls: tests/check_dispatch_calls.sh $(B)/simd_dispatch_w8.o
 	@printf '#!/bin/sh\nexec sh tests/check_dispatch_calls.sh $(B)/simd_dispatch_w8.o\n' > $@ && chmod +x $@
 
-test: deps $(TESTS) $(SANITIZED) compile-matrix examples $(B)/run_examples $(B)/check_dispatch_calls
+test: deps $(TESTS) $(SANITIZED) compile-matrix examples $(B)/run_examples $(B)/check_dispatch_calls $(B)/motion_cost
 	@sh tests/run_all.sh $(SANITIZED) $(TESTS) $(B)/run_examples $(B)/check_dispatch_calls
 
 check: $(CHECK_TESTS)
