@@ -2,7 +2,8 @@
    the same rays traced by four builds of hairobb.h (plain C; SSE4.1; AVX2;
    the x86-64 baseline, forced to SSE2 and dispatched to its AVX2 kernels),
    compared field by field, bit for bit, on several scenes, node policies and
-   intersector precisions. */
+   intersector precisions, and on moving hair (motion blur: rotating and
+   translating fur, 2 to 4 time steps) at random ray times. */
 #define _POSIX_C_SOURCE 200809L
 #include "simd_variant.h"
 #include "check.h"
@@ -40,9 +41,21 @@ typedef struct simd_path {
     int needs_avx2;           /* compiled with -mavx2: runs only where the CPU has it */
 } simd_path;
 
+/* A motion-blurred BVH's ray times: random in [0, 1], every 16th ray at a
+   knot k / (T - 1) (0 and 1 among them) and every 61st outside [0, 1] or
+   NaN, which must miss. */
+static float ray_time(size_t i, unsigned time_steps, scene_rng *rng)
+{
+    static const float outside[4] = {-0.25f, 1.5f, -1e-30f, NAN};
+    if (i % 61 == 60) return outside[(i / 61) % 4];
+    if (i % 16 == 15) return (float)((i / 16) % time_steps) / (float)(time_steps - 1);
+    return scene_rng_float(rng);
+}
+
 static void compare_paths(const hair_scene *s, const hairobb_build_options *options, const char *what)
 {
-    size_t n = (size_t)SIDE * SIDE, i, hits = 0, differ[4] = {0, 0, 0, 0};
+    size_t n = (size_t)SIDE * SIDE, i, hits = 0, differ[4] = {0, 0, 0, 0}, outside_hits = 0;
+    scene_rng rng;
     float *org = (float *)malloc(3 * sizeof(float) * n), *dir = (float *)malloc(3 * sizeof(float) * n);
     hairobb_ray *rays = (hairobb_ray *)malloc(sizeof(hairobb_ray) * n);
     hairobb_hit *plain = (hairobb_hit *)malloc(sizeof(hairobb_hit) * n);
@@ -63,19 +76,25 @@ static void compare_paths(const hair_scene *s, const hairobb_build_options *opti
     if (!have_avx) paths[3].expect = HAIROBB_SIMD_SSE2;
 
     scene_camera_rays(s, SIDE, SIDE, org, dir);
+    scene_rng_seed(&rng, 5);
     for (i = 0; i < n; ++i) {
         memcpy(rays[i].org, org + 3 * i, sizeof rays[i].org);
         memcpy(rays[i].dir, dir + 3 * i, sizeof rays[i].dir);
         rays[i].tnear = 0.0f;
         rays[i].tfar = INFINITY;
+        rays[i].time = options->time_steps >= 2 ? ray_time(i, options->time_steps, &rng) : 0.0f;
     }
     CHECK(trace_plain(s->vertices, s->vertex_count, s->indices, s->segment_count, options, rays, n, plain, occluded_plain, &used, visits),
           "%s %s: plain C build", s->name, what);
     CHECK(used == HAIROBB_SIMD_NONE, "%s %s: plain C build traced with %s", s->name, what, path_name(used));
-    for (i = 0; i < n; ++i) hits += plain[i].prim_id != HAIROBB_INVALID_ID;
+    for (i = 0; i < n; ++i) {
+        hits += plain[i].prim_id != HAIROBB_INVALID_ID;
+        outside_hits += !(rays[i].time >= 0.0f && rays[i].time <= 1.0f) && (plain[i].prim_id != HAIROBB_INVALID_ID || occluded_plain[i]);
+    }
     CHECK(hits > n / 20, "%s %s: %zu of %zu rays hit", s->name, what, hits, n);
+    CHECK(outside_hits == 0, "%s %s: %zu rays at times outside [0, 1] hit", s->name, what, outside_hits);
 
-    printf("%-8s %-33s %5zu hits of %zu rays; differ from plain C:", s->name, what, hits, n);
+    printf("%-8s %-46s %5zu hits of %zu rays; differ from plain C:", s->name, what, hits, n);
     for (k = 0; k < 4; ++k) {
         if (paths[k].needs_avx2 && !have_avx) { printf(" %s skipped (no AVX2),", paths[k].name); continue; }
         asked.simd = paths[k].request;
@@ -96,6 +115,39 @@ static void compare_paths(const hair_scene *s, const hairobb_build_options *opti
     free(org); free(dir); free(rays); free(plain); free(other); free(occluded_plain); free(occluded_other);
 }
 
+/* Moving hair: the scene rotating or translating over time_steps steps,
+   traced at random times with several option sets. */
+static void compare_motion(const hair_scene *s, scene_motion motion, double amount, int time_steps)
+{
+    static const struct { const char *name; hairobb_node_policy nodes; hairobb_obb_layout layout; hairobb_precision precision; unsigned pieces; } sets[] = {
+        {"mixed", HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 0},
+        {"aabb-only", HAIROBB_NODES_AABB_ONLY, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 0},
+        {"obb-only, shared rotation", HAIROBB_NODES_OBB_ONLY, HAIROBB_OBB_SHARED_ROTATION, HAIROBB_PRECISION_EXACT, 0},
+        {"compressed, pieces=4", HAIROBB_NODES_MIXED, HAIROBB_OBB_COMPRESSED, HAIROBB_PRECISION_PIECES, 4},
+    };
+    float *steps[4];
+    size_t k;
+    if (scene_motion_steps(s, motion, amount, time_steps, steps) != 0) {
+        CHECK(0, "%s: motion steps", s->name);
+        return;
+    }
+    for (k = 0; k < sizeof sets / sizeof sets[0]; ++k) {
+        hairobb_build_options options;
+        char what[64];
+        memset(&options, 0, sizeof options);
+        options.nodes = sets[k].nodes;
+        options.obb_layout = sets[k].layout;
+        options.precision = sets[k].precision;
+        options.curve_pieces = sets[k].pieces;
+        options.time_steps = (unsigned)time_steps;
+        options.time_vertices = (const float *const *)steps;
+        snprintf(what, sizeof what, "%s %.2g T=%d, %s", motion == SCENE_MOTION_ROTATE ? "rotate" : "shift", amount, time_steps,
+                 sets[k].name);
+        compare_paths(s, &options, what);
+    }
+    scene_motion_free(steps, time_steps);
+}
+
 int main(void)
 {
     hair_scene scenes[3];
@@ -103,6 +155,21 @@ int main(void)
     CHECK(scene_combed(&scenes[0], 30000, 11) == 0, "combed");
     CHECK(scene_curly(&scenes[1], 30000, 12) == 0, "curly");
     CHECK(scene_random(&scenes[2], 30000, 13) == 0, "random");
+    /* moving hair, 10k segments (a build bounds every step): strands swept
+       by 0.8 rad about their roots, or the whole scene shifted by 0.5
+       (several strand spacings) */
+    {
+        hair_scene moving;
+        CHECK(scene_combed(&moving, 10000, 14) == 0, "combed");
+        compare_motion(&moving, SCENE_MOTION_ROTATE, 0.8, 2);
+        scene_free(&moving);
+        CHECK(scene_curly(&moving, 10000, 15) == 0, "curly");
+        compare_motion(&moving, SCENE_MOTION_TRANSLATE, 0.5, 3);
+        scene_free(&moving);
+        CHECK(scene_random(&moving, 10000, 16) == 0, "random");
+        compare_motion(&moving, SCENE_MOTION_ROTATE, 0.8, 4);
+        scene_free(&moving);
+    }
     for (k = 0; k < 3; ++k) {
         for (policy = 0; policy < 3; ++policy) {
             static const char *names[] = {"mixed", "aabb-only", "obb-only"};
