@@ -711,7 +711,9 @@ static inline int scene_yeti(hair_scene *s, size_t target_segments, uint64_t see
     const float body_radius = 0.5f, half_length = 0.75f;
     const double golden_turn = 0.38196601125010515; /* the golden angle in turns: 2 - golden ratio */
     memset(s, 0, sizeof *s);
-    size_t strand_count = scene_strand_count_for(target_segments, SEGMENTS);
+    /* scene_strand_count_for's rounding, without its overflow near SIZE_MAX */
+    size_t strand_count = target_segments / SEGMENTS + (target_segments % SEGMENTS >= SEGMENTS / 2);
+    strand_count = strand_count > 0 ? strand_count : 1;
     if (strand_count > UINT32_MAX / POINTS || strand_count > SIZE_MAX / (POINTS * 16) - 1)
         return 1;
     size_t point_count = strand_count * POINTS, segment_count = strand_count * SEGMENTS;
