@@ -94,6 +94,8 @@ typedef struct options {
     unsigned thread_counts[MAX_THREAD_COUNTS];
     int thread_count_count;
     const char *variant_list;
+    int variants_given;             /* --variants on the command line (else Catmull-Rom scenes run the yeti group) */
+    size_t memory_mb;               /* --memory-mb: what the memory checks take as available; 0 = MemAvailable */
     int rounds;
     size_t accuracy_rays;
     const char *tsv_path, *png_path, *plot_script;
@@ -231,6 +233,8 @@ static const struct { const char *name, *members; } variant_groups[] = {
     {"ablation", "aabb,obb,mixed-uncompressed,spatial,spatial-compressed,spatial-compressed-cluster,shared,compressed-shared,default"},
     {"mixed", "default"},
     {"bases", "default,catmull-rom,catmull-rom-copy"},
+    /* a Catmull-Rom scene (yeti) without --variants: hairobb without the copy, Embree on the same buffers */
+    {"yeti", "catmull-rom,embree-r4,embree-round"},
 };
 
 static int variant_index(const char *key)
@@ -268,6 +272,127 @@ static int select_variants(const char *list, int selected[VARIANT_COUNT])
         }
     }
     return 0;
+}
+
+/* ======================================================================== */
+/* Catmull-Rom scenes (yeti) and the memory they need                       */
+/* ======================================================================== */
+
+/* On a Catmull-Rom scene every variant reads the scene's own curves from
+   the same shared buffers: hairobb rows build with that basis (the Bezier
+   rows with hairobb's default, the Bezier copy; "catmull-rom" without it),
+   Embree rows use the Catmull-Rom curve of their type. */
+static hairobb_basis variant_basis(const variant *v, const hair_scene *s)
+{
+    return s->basis == SCENE_BASIS_CATMULL_ROM && v->basis == HAIROBB_BASIS_BEZIER ? HAIROBB_BASIS_CATMULL_ROM : v->basis;
+}
+
+static int variant_embree_type(const variant *v, const hair_scene *s)
+{
+    if (s->basis != SCENE_BASIS_CATMULL_ROM)
+        return v->embree_type;
+    return v->embree_type == EMB_ROUND_BEZIER ? EMB_ROUND_CATMULL_ROM : EMB_FLAT_CATMULL_ROM;
+}
+
+/* Whether the reference judges a variant's surface: on a Catmull-Rom scene
+   the reference reads the segments' Bezier form, the curves hairobb's rows
+   trace; on a Bezier scene the "catmull-rom" rows read other curves. */
+static int variant_comparable(const variant *v, scene_basis basis)
+{
+    return basis == SCENE_BASIS_CATMULL_ROM && v->lib == LIB_HAIROBB ? 1 : v->accuracy_comparable;
+}
+
+/* The hairobb variant whose BVH spawns the secondary rays (and is kept for
+   its row): the defaults, or on a Catmull-Rom scene the row without the
+   copy, whose 72 bytes a segment would be 11 GB at 153M segments. */
+static int spawn_variant(const hair_scene *s)
+{
+    return variant_index(s->basis == SCENE_BASIS_CATMULL_ROM ? "catmull-rom" : "default");
+}
+
+/* Bytes a segment that a build adds to the process at its peak (its
+   structure and its transient memory) or the accuracy reference takes, for
+   the check below. Yeti at 10M segments (bench/results/yeti-10M-*.txt):
+   hairobb without the copy 70 of peak RSS (BVH 36, transient 32 by its
+   allocator), Embree 136 allocated (its memory monitor; 114 of RSS, no
+   higher peak), the reference 259 of RSS with the Bezier form. */
+#define HAIROBB_BUILD_PEAK_BYTES_PER_SEGMENT 80.0
+#define HAIROBB_COPY_BYTES_PER_SEGMENT 72.0         /* the Bezier copy of another basis */
+#define EMBREE_BUILD_PEAK_BYTES_PER_SEGMENT 150.0
+#define REFERENCE_BYTES_PER_SEGMENT 272.0           /* tests/reference.h's allocations: copies, boxes, nodes */
+#define BEZIER_FORM_BYTES_PER_SEGMENT 68.0          /* scene_to_bezier, for the reference of a Catmull-Rom scene */
+
+static double estimated_build_bytes(const variant *v, const hair_scene *s)
+{
+    double per_segment = EMBREE_BUILD_PEAK_BYTES_PER_SEGMENT;
+    if (v->lib == LIB_HAIROBB) {
+        int copy = variant_basis(v, s) != HAIROBB_BASIS_BEZIER && v->bezier_copy != HAIROBB_OFF;
+        per_segment = HAIROBB_BUILD_PEAK_BYTES_PER_SEGMENT + (copy ? HAIROBB_COPY_BYTES_PER_SEGMENT : 0.0);
+    }
+    return per_segment * (double)s->segment_count;
+}
+
+/* A field of /proc/self/status or /proc/meminfo in bytes (their kB lines);
+   0 when absent. */
+static size_t proc_field_bytes(const char *path, const char *field)
+{
+    char line[256];
+    size_t length = strlen(field), kilobytes = 0;
+    FILE *f = fopen(path, "r");
+    if (!f)
+        return 0;
+    while (fgets(line, sizeof line, f))
+        if (strncmp(line, field, length) == 0 && line[length] == ':') {
+            kilobytes = (size_t)strtoull(line + length + 1, NULL, 10);
+            break;
+        }
+    fclose(f);
+    return kilobytes * 1024;
+}
+
+static size_t memory_limit_bytes; /* --memory-mb, else 0 */
+
+/* 1 if bytes fit in what the machine can still give (MemAvailable: other
+   processes and what this one holds already are not in it; or --memory-mb
+   less what this process holds), keeping a tenth of it free; else 0 and
+   why says so. Unknown availability fits. */
+static int memory_fits(double bytes, const char *what, char *why, size_t size)
+{
+    size_t available = proc_field_bytes("/proc/meminfo", "MemAvailable");
+    if (memory_limit_bytes) {
+        size_t held = proc_field_bytes("/proc/self/status", "VmRSS");
+        available = memory_limit_bytes > held ? memory_limit_bytes - held : 1;
+    }
+    if (available == 0 || bytes <= 0.9 * (double)available)
+        return 1;
+    snprintf(why, size, "%s needs about %.2f GB (estimated), %.2f GB available (%s)", what, bytes * 1e-9,
+             (double)available * 1e-9, memory_limit_bytes ? "--memory-mb less this process's RSS" : "MemAvailable");
+    return 0;
+}
+
+/* A step's resident memory: before, after, and its peak (VmHWM, reset at
+   the step's start by writing 5 to /proc/self/clear_refs; where that is
+   refused, the process's peak so far). */
+typedef struct rss_step {
+    size_t before, after, peak;
+} rss_step;
+
+static int rss_peak_reset_works = 1;
+
+static void rss_step_begin(rss_step *r)
+{
+    FILE *f = fopen("/proc/self/clear_refs", "w");
+    rss_peak_reset_works = f && fputs("5", f) >= 0;
+    if (f && fclose(f) != 0)
+        rss_peak_reset_works = 0;
+    r->before = proc_field_bytes("/proc/self/status", "VmRSS");
+    r->after = r->peak = 0;
+}
+
+static void rss_step_end(rss_step *r)
+{
+    r->after = proc_field_bytes("/proc/self/status", "VmRSS");
+    r->peak = proc_field_bytes("/proc/self/status", "VmHWM");
 }
 
 /* ======================================================================== */
@@ -490,6 +615,8 @@ static int load_scene(const options *o, const char *name, hair_scene *s, char wh
         return scene_random(s, o->segments, 3);
     if (strcmp(name, "crossing") == 0)
         return scene_crossing(s, o->segments, 4);
+    if (strcmp(name, "yeti") == 0)
+        return scene_yeti(s, o->segments, 5);
     if (strcmp(name, "straight") == 0 || strcmp(name, "furball") == 0) {
         int straight = name[0] == 's';
         path = straight ? o->straight_path : o->furball_path; /* given on the command line */
@@ -705,7 +832,17 @@ static int accuracy_prepare(const hair_scene *s, const ray_set *primary, size_t 
     if (accuracy_pick(primary, wanted, a) != 0)
         return 1;
     double start = scene_now();
-    ref_scene *reference = ref_build(s->vertices, s->vertex_count, s->indices, s->segment_count);
+    /* the reference reads Bezier segments: a Catmull-Rom scene's are converted for it, then freed */
+    hair_scene bezier;
+    const hair_scene *input = s;
+    if (s->basis != SCENE_BASIS_BEZIER) {
+        if (scene_to_bezier(s, &bezier) != 0)
+            return 1;
+        input = &bezier;
+    }
+    ref_scene *reference = ref_build(input->vertices, input->vertex_count, input->indices, input->segment_count);
+    if (input == &bezier)
+        scene_free(&bezier);
     if (!reference)
         return 1;
     reference_trace(reference, a, 0, a->rays.count, thread_count);
@@ -792,6 +929,8 @@ typedef struct variant_result {
     spread ratio[RAY_KIND_COUNT][MAX_THREAD_COUNTS];
     int has_accuracy;
     accuracy_summary accuracy;
+    rss_step build_rss;    /* the process's resident memory over the build */
+    char skipped[192];     /* why it was not built (memory), or empty */
 } variant_result;
 
 typedef struct scene_result {
@@ -800,6 +939,8 @@ typedef struct scene_result {
     size_t ray_counts[RAY_KIND_COUNT];
     int loaded;
     variant_result variants[VARIANT_COUNT];
+    scene_basis basis;
+    int selected[VARIANT_COUNT]; /* the variants run on this scene */
 } scene_result;
 
 /* Everything a scene's variants share: the geometry and the rays. */
@@ -816,6 +957,11 @@ typedef struct workload {
     hairobb_bvh *default_bvh;
     double default_build_seconds;
     size_t default_build_transient_bytes;
+    rss_step default_build_rss;
+    /* resident memory over the scene's generation, the reference and the timed tracing */
+    rss_step scene_rss, reference_rss, trace_rss;
+    double scene_seconds;       /* generating or loading the scene */
+    char accuracy_skipped[192]; /* why the reference was not built (memory), or empty */
 } workload;
 
 /* An acceleration structure built for one variant. */
@@ -892,7 +1038,7 @@ static hairobb_bvh *build_hairobb(const hair_scene *s, const variant *v, double 
     build_options.spatial_splits = v->spatial_splits;
     build_options.clustering = v->clustering;
     build_options.simd = v->simd;
-    build_options.basis = v->basis;
+    build_options.basis = variant_basis(v, s);
     build_options.bezier_copy = v->bezier_copy;
     return build_metered(s, s->vertices, &build_options, v->key, seconds, transient_bytes);
 }
@@ -902,10 +1048,11 @@ static int build_variant(workload *w, const variant *v, built_accel *b, variant_
     const hair_scene *s = &w->scene;
     memset(b, 0, sizeof *b);
     if (v->lib == LIB_HAIROBB) {
-        if (w->default_bvh && v == &all_variants[variant_index("default")]) {
+        if (w->default_bvh && v == &all_variants[spawn_variant(s)]) {
             b->bvh = w->default_bvh;
             r->build_seconds = w->default_build_seconds;
             r->build_transient_bytes = w->default_build_transient_bytes;
+            r->build_rss = w->default_build_rss;
             w->default_bvh = NULL;
         } else {
             b->bvh = build_hairobb(s, v, &r->build_seconds, &r->build_transient_bytes);
@@ -917,8 +1064,9 @@ static int build_variant(workload *w, const variant *v, built_accel *b, variant_
         b->tracer = hairobb_tracer(b->bvh);
     } else {
         /* threads 0: Embree builds on every core, as it would in a renderer */
-        b->embree = emb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, v->embree_type,
-                              v->embree_rate, 0, &r->memory_bytes, &r->build_seconds);
+        b->embree = emb_build_curves(s->vertices, s->vertex_count, s->indices, s->segment_count,
+                                     variant_embree_type(v, s), NULL, v->embree_rate, 0, &r->memory_bytes,
+                                     &r->build_seconds);
         if (!b->embree)
             return 1;
         b->tracer = embree_tracer(b->embree);
@@ -941,7 +1089,17 @@ static int build_and_record(workload *w, const variant *v, built_accel *accel, v
         for (int t = 0; t < MAX_THREAD_COUNTS; t++)
             r->mrays[k][t] = r->ratio[k][t] = (spread){NAN, NAN, NAN};
     progress_start("  %s: build", v->label);
-    if (build_variant(w, v, accel, r) != 0) {
+    int adopted = w->default_bvh && v == &all_variants[spawn_variant(&w->scene)];
+    if (!adopted && !memory_fits(estimated_build_bytes(v, &w->scene), "the build", r->skipped, sizeof r->skipped)) {
+        progress("skipped: %s", r->skipped);
+        return 1;
+    }
+    if (!adopted)
+        rss_step_begin(&r->build_rss);
+    int failed = build_variant(w, v, accel, r);
+    if (!adopted)
+        rss_step_end(&r->build_rss);
+    if (failed) {
         progress("failed");
         return 1;
     }
@@ -1006,8 +1164,15 @@ static unsigned max_threads(const options *o)
    variant if it is selected. */
 static int spawn_secondary_rays(const options *o, workload *w, int keep_bvh)
 {
-    const variant *v = &all_variants[variant_index("default")];
+    const variant *v = &all_variants[spawn_variant(&w->scene)];
+    char why[192];
+    if (!memory_fits(estimated_build_bytes(v, &w->scene), "the BVH that spawns the secondary rays", why, sizeof why)) {
+        fprintf(stderr, "bench: %s: %s (--rays primary needs none)\n", w->scene.name, why);
+        return 1;
+    }
+    rss_step_begin(&w->default_build_rss);
     hairobb_bvh *bvh = build_hairobb(&w->scene, v, &w->default_build_seconds, &w->default_build_transient_bytes);
+    rss_step_end(&w->default_build_rss);
     if (!bvh)
         return 1;
     tracer t = hairobb_tracer(bvh);
@@ -1046,10 +1211,18 @@ static int workload_prepare(const options *o, const int selected[VARIANT_COUNT],
                                    sizeof(hit_record));
     if (!w->hits)
         return 1;
-    if (o->accuracy_rays > 0) {
+    double reference_bytes = (REFERENCE_BYTES_PER_SEGMENT +
+                              (w->scene.basis != SCENE_BASIS_BEZIER ? BEZIER_FORM_BYTES_PER_SEGMENT : 0.0)) *
+                             (double)w->scene.segment_count;
+    if (o->accuracy_rays > 0 &&
+        !memory_fits(reference_bytes, "the reference", w->accuracy_skipped, sizeof w->accuracy_skipped))
+        progress("%s: accuracy skipped: %s", w->scene.name, w->accuracy_skipped);
+    else if (o->accuracy_rays > 0) {
         progress_start("%s: reference on %zu primary rays", w->scene.name, o->accuracy_rays);
-        if (accuracy_prepare(&w->scene, &w->rays[RAYS_PRIMARY], o->accuracy_rays, max_threads(o), &w->accuracy) !=
-            0) {
+        rss_step_begin(&w->reference_rss);
+        int failed = accuracy_prepare(&w->scene, &w->rays[RAYS_PRIMARY], o->accuracy_rays, max_threads(o), &w->accuracy);
+        rss_step_end(&w->reference_rss);
+        if (failed) {
             progress("failed");
             fprintf(stderr, "bench: %s: reference failed (out of memory?)\n", w->scene.name);
             return 1;
@@ -1059,7 +1232,7 @@ static int workload_prepare(const options *o, const int selected[VARIANT_COUNT],
     }
     if (o->ray_kind_enabled[RAYS_INCOHERENT] || o->ray_kind_enabled[RAYS_SHADOW]) {
         progress_start("%s: secondary rays from the default hairobb BVH's primary hits", w->scene.name);
-        if (spawn_secondary_rays(o, w, selected[variant_index("default")]) != 0) {
+        if (spawn_secondary_rays(o, w, selected[spawn_variant(&w->scene)]) != 0) {
             progress("failed");
             return 1;
         }
@@ -1101,8 +1274,9 @@ static void print_scene_header(const options *o, const workload *w)
            s->lower[0], s->lower[1], s->lower[2], s->upper[0], s->upper[1], s->upper[2]);
     printf("rays: primary %zu (%dx%d pinhole)", w->rays[RAYS_PRIMARY].count, o->resolution, o->resolution);
     if (w->rays[RAYS_INCOHERENT].count || w->rays[RAYS_SHADOW].count)
-        printf(", %.1f%% hit by default hairobb; incoherent %zu (diffuse bounce), shadow %zu (point light)",
+        printf(", %.1f%% hit by %s; incoherent %zu (diffuse bounce), shadow %zu (point light)",
                100.0 * (double)w->primary_hits / (double)w->rays[RAYS_PRIMARY].count,
+               s->basis == SCENE_BASIS_BEZIER ? "default hairobb" : all_variants[spawn_variant(s)].label,
                w->rays[RAYS_INCOHERENT].count, w->rays[RAYS_SHADOW].count);
     printf("\n");
     if (w->has_accuracy) {
@@ -1202,10 +1376,13 @@ static void print_accuracy_table(const workload *w, const scene_result *sr, cons
         snprintf(disagree, sizeof disagree, "%.3f%% (%zu)", disagreement_percent(a), a->disagreements);
         printf("%-20s %-17s %-10.2e %-10.2e %-10.2e %-10.2e %-10.2e\n", all_variants[i].label, disagree, a->t_median,
                a->t_p99, a->t_max, a->u_median, a->u_p99);
-        any_informative |= !all_variants[i].accuracy_comparable;
+        if (!variant_comparable(&all_variants[i], sr->basis))
+            any_informative |= all_variants[i].lib == LIB_EMBREE ? 1 : 2;
     }
-    if (any_informative)
+    if (any_informative & 1)
         printf("* round curves are swept spheres, not the reference's flat ribbon: informative, not comparable\n");
+    if (any_informative & 2)
+        printf("* the C-R rows read this scene's Bezier points as Catmull-Rom points: other curves, not comparable\n");
 }
 
 /* Rows AABB-only, OBB-only, mixed per scene, as in the paper's results
@@ -1274,6 +1451,76 @@ static void print_tradeoff_table(const options *o, const scene_result *results, 
             first = 0;
         }
     }
+}
+
+/* The variants a scene runs: --variants; without it a Catmull-Rom scene
+   runs the yeti group (the Bezier rows there would each hold a 72-byte
+   copy a segment, the rest of "all" reads Bezier points). */
+static void scene_variants(const options *o, const hair_scene *s, const int requested[VARIANT_COUNT], scene_result *sr)
+{
+    sr->basis = s->basis;
+    if (s->basis == SCENE_BASIS_CATMULL_ROM && !o->variants_given) {
+        memset(sr->selected, 0, sizeof sr->selected);
+        select_variants("yeti", sr->selected);
+    } else {
+        memcpy(sr->selected, requested, sizeof sr->selected);
+    }
+}
+
+/* What a Catmull-Rom scene holds and what each row reads from it. */
+static void print_curves_note(const workload *w)
+{
+    const hair_scene *s = &w->scene;
+    if (s->basis != SCENE_BASIS_CATMULL_ROM)
+        return;
+    double bytes = (double)s->vertex_count * 16.0 + (double)s->segment_count * 4.0;
+    printf("curves: Catmull-Rom, %zu control points shared along the strands (%.4f a segment), %.1f MB of points and "
+           "indices (%.2f bytes a segment), generated in %.2f s; every row reads these buffers: hairobb with the basis "
+           "set (the Bezier copy unless 'no copy'), Embree as Catmull-Rom curves of its type\n",
+           s->vertex_count, (double)s->vertex_count / (double)s->segment_count, bytes / 1048576.0,
+           bytes / (double)s->segment_count, w->scene_seconds);
+}
+
+static void print_rss_row(const char *step, const rss_step *r)
+{
+    printf("%-30s %-10.1f %-10.1f %-10.1f\n", step, (double)r->before / 1048576.0, (double)r->after / 1048576.0,
+           (double)r->peak / 1048576.0);
+}
+
+/* The process's resident memory over each step of the scene, and the
+   scene's peak: what a machine needs to run it. */
+static void print_memory_table(const workload *w, const scene_result *sr)
+{
+    size_t peak = 0;
+    const rss_step *steps[] = {&w->scene_rss, &w->reference_rss, &w->default_build_rss, &w->trace_rss};
+    printf("\nprocess memory, MB (RSS before and after each step, and its peak: VmHWM, %s)\n",
+           rss_peak_reset_works ? "reset at the step's start" : "not resettable here: the process's peak so far");
+    printf("%-30s %-10s %-10s %-10s\n", "step", "before", "after", "peak");
+    print_rss_row("scene generated/loaded", &w->scene_rss);
+    if (w->has_accuracy)
+        print_rss_row("accuracy reference", &w->reference_rss);
+    for (int i = 0; i < VARIANT_COUNT; i++) {
+        const variant_result *r = &sr->variants[i];
+        char step[64];
+        if (!sr->selected[i] || !r->measured)
+            continue;
+        snprintf(step, sizeof step, "build %s", all_variants[i].label);
+        print_rss_row(step, &r->build_rss);
+        peak = r->build_rss.peak > peak ? r->build_rss.peak : peak;
+    }
+    /* the BVH that spawned the secondary rays, when its row was not run */
+    if (w->default_build_rss.peak && !sr->variants[spawn_variant(&w->scene)].measured)
+        print_rss_row("build for secondary rays", &w->default_build_rss);
+    print_rss_row("tracing (timed rounds)", &w->trace_rss);
+    for (size_t k = 0; k < sizeof steps / sizeof steps[0]; k++)
+        peak = steps[k]->peak > peak ? steps[k]->peak : peak;
+    printf("peak over the scene: %.1f MB (%.1f bytes a segment)\n", (double)peak / 1048576.0,
+           (double)peak / (double)sr->segment_count);
+    for (int i = 0; i < VARIANT_COUNT; i++)
+        if (sr->selected[i] && sr->variants[i].skipped[0])
+            printf("%s: skipped, %s\n", all_variants[i].label, sr->variants[i].skipped);
+    if (w->accuracy_skipped[0])
+        printf("accuracy: skipped, %s\n", w->accuracy_skipped);
 }
 
 /* ======================================================================== */
@@ -1354,7 +1601,7 @@ static void tsv_write_scene(FILE *f, const options *o, const scene_result *sr, c
         } else {
             fputs("\t0\t0\tNaN\tNaN\tNaN\tNaN\tNaN\tNaN", f);
         }
-        fprintf(f, "\t%d\t%s", v->accuracy_comparable, v->on_chart ? (hairobb ? "hairobb" : "embree") : "-");
+        fprintf(f, "\t%d\t%s", variant_comparable(v, sr->basis), v->on_chart ? (hairobb ? "hairobb" : "embree") : "-");
         for (int k = 0; k < RAY_KIND_COUNT; k++)
             for (int t = 0; t < o->thread_count_count; t++) {
                 tsv_number(f, "\t%.4f", r->mrays[k][t].min);
@@ -1528,7 +1775,12 @@ static void print_help(void)
     printf("usage: build/bench [options]   (run from the repository root)\n"
            "  --scene LIST        scenes, comma list or repeated (default combed):\n"
            "                      combed, curly, random, crossing (procedural), straight (--straight-path),\n"
-           "                      furball (Embree's furBall_A, skipped if absent), or a PATH.hair file\n"
+           "                      furball (Embree's furBall_A, skipped if absent), or a PATH.hair file;\n"
+           "                      yeti: Yeti-class fur on a capsule, Catmull-Rom strands of 16 segments\n"
+           "                        holding 19 shared points (1.19 a segment), run by default with the yeti\n"
+           "                        group (with --variants, every row reads its Catmull-Rom curves); builds\n"
+           "                        and the reference that would not fit in MemAvailable are skipped, said so;\n"
+           "                        the paper's size: --scene yeti --segments 153M --rays primary,incoherent\n"
            "  --segments N        segments of procedural scenes (default %d; k and M suffixes allowed)\n"
            "  --res N             primary rays: N x N pinhole camera framing the hair (default %d)\n"
            "  --rays LIST         ray sets: primary, incoherent, shadow (default all)\n"
@@ -1539,11 +1791,16 @@ static void print_help(void)
            "                        spatial-compressed-cluster, shared, compressed-shared,\n"
            "                        build-1t (defaults built on 1 thread), filter (a hit filter taking every hit),\n"
            "                        sse2 (the SSE2 kernels, where the build has them: not with -mavx2 or -march)\n"
+           "                        catmull-rom, catmull-rom-copy (Catmull-Rom basis, without and with the Bezier\n"
+           "                        copy: on Bezier scenes other curves through the same points)\n"
            "                      Embree: embree-r4, embree-r8, embree-r16 (flat), embree-round\n"
-           "                      groups: all, hairobb, embree, precision, ablation\n"
+           "                      groups: all, hairobb, embree, precision, ablation, bases,\n"
+           "                        yeti (catmull-rom: hairobb C-R without the Bezier copy, embree-r4, embree-round)\n"
            "  --rounds N          timing rounds, one pass of every variant each, after a warm-up pass;\n"
            "                      medians and [min-max] reported (default %d, 1..64; --passes: the same)\n"
            "  --accuracy-rays N   primary rays checked against the reference, 0 = none (default %d)\n"
+           "  --memory-mb N       builds and the reference whose estimated memory exceeds 0.9 of what is\n"
+           "                      available are skipped: N MB less this process's RSS (default MemAvailable)\n"
            "  --tsv FILE          every figure, one row per scene and variant (default %s)\n"
            "  --png FILE          run time against error chart, drawn by gnuplot if present (default %s)\n"
            "  --plot-script FILE  gnuplot script (default %s)\n"
@@ -1706,13 +1963,16 @@ static int parse_options(int argc, char **argv, options *o)
             bad = parse_ray_kinds(o, value);
         else if (strcmp(name, "--threads") == 0)
             bad = parse_thread_counts(o, value);
-        else if (strcmp(name, "--variants") == 0)
+        else if (strcmp(name, "--variants") == 0) {
             o->variant_list = value;
-        else if (strcmp(name, "--rounds") == 0 || strcmp(name, "--passes") == 0) {
+            o->variants_given = 1;
+        } else if (strcmp(name, "--rounds") == 0 || strcmp(name, "--passes") == 0) {
             bad = parse_count(value, &count) || count < 1 || count > MAX_ROUNDS;
             o->rounds = (int)count;
         } else if (strcmp(name, "--accuracy-rays") == 0)
             bad = parse_count(value, &o->accuracy_rays);
+        else if (strcmp(name, "--memory-mb") == 0)
+            bad = parse_count(value, &o->memory_mb) || o->memory_mb == 0;
         else if (strcmp(name, "--tsv") == 0)
             o->tsv_path = value;
         else if (strcmp(name, "--png") == 0)
@@ -2385,8 +2645,9 @@ static void profile_scene(const options *o, workload *w, const int selected[VARI
     }
 }
 
-/* Loads, measures and prints one scene. Returns 0, or 1 on an error. */
-static int run_scene(const options *o, const char *name, const int selected[VARIANT_COUNT], scene_result *sr)
+/* Loads, measures and prints one scene. Returns 0, or 1 on an error.
+   requested: --variants (sr->selected: those this scene runs). */
+static int run_scene(const options *o, const char *name, const int requested[VARIANT_COUNT], scene_result *sr)
 {
     workload w;
     memset(&w, 0, sizeof w);
@@ -2395,7 +2656,10 @@ static int run_scene(const options *o, const char *name, const int selected[VARI
     progress("%s: loading", name);
     double start = scene_now();
     char why[TEST_DATA_WHY_SIZE];
+    rss_step_begin(&w.scene_rss);
     int loaded = load_scene(o, name, &w.scene, why);
+    rss_step_end(&w.scene_rss);
+    w.scene_seconds = scene_now() - start;
     if (loaded == -1) {
         printf("\n=== scene %s skipped: %s\n", name, why);
         return 0;
@@ -2408,6 +2672,8 @@ static int run_scene(const options *o, const char *name, const int selected[VARI
     progress("%s: %zu segments in %.2f s", w.scene.name, w.scene.segment_count, scene_now() - start);
     snprintf(sr->name, sizeof sr->name, "%s", w.scene.name);
     sr->segment_count = w.scene.segment_count;
+    scene_variants(o, &w.scene, requested, sr);
+    const int *selected = sr->selected;
     if (workload_prepare(o, selected, &w) != 0) {
         workload_free(&w);
         return 1;
@@ -2426,7 +2692,9 @@ static int run_scene(const options *o, const char *name, const int selected[VARI
     for (int i = 0; i < VARIANT_COUNT; i++)
         if (selected[i])
             build_and_record(&w, &all_variants[i], &accel[i], &sr->variants[i]);
+    rss_step_begin(&w.trace_rss);
     time_in_rounds(o, &w, accel, sr);
+    rss_step_end(&w.trace_rss);
     for (int i = 0; i < VARIANT_COUNT; i++) {
         variant_result *r = &sr->variants[i];
         if (r->measured && w.has_accuracy) {
@@ -2437,9 +2705,11 @@ static int run_scene(const options *o, const char *name, const int selected[VARI
         free_variant(&accel[i]);
     }
     print_scene_header(o, &w);
+    print_curves_note(&w);
     print_build_table(sr, selected);
     print_speed_table(o, sr, selected);
     print_accuracy_table(&w, sr, selected);
+    print_memory_table(&w, sr);
     fflush(stdout);
     workload_free(&w);
     return 0;
@@ -2455,6 +2725,7 @@ int main(int argc, char **argv)
     if (select_variants(o.variant_list, selected) != 0)
         return 2;
     show_progress = isatty(STDERR_FILENO) && !o.quiet;
+    memory_limit_bytes = o.memory_mb * (size_t)1048576;
     alloc_meter_init(&hairobb_meter, 0);
 
     print_machine(&o);
@@ -2476,15 +2747,20 @@ int main(int argc, char **argv)
     for (int s = 0; s < o.scene_count; s++) {
         failures += run_scene(&o, o.scenes[s], selected, &results[s]);
         if (tsv && results[s].loaded)
-            tsv_write_scene(tsv, &o, &results[s], selected);
+            tsv_write_scene(tsv, &o, &results[s], results[s].selected);
     }
     if (tsv)
         fclose(tsv);
 
     char note[512];
-    const char *chart_note = tsv ? draw_chart(&o, results, o.scene_count, selected, note, sizeof note) : "no TSV, no chart";
-    print_ablation_table(&o, results, o.scene_count, selected);
-    print_tradeoff_table(&o, results, o.scene_count, selected, chart_note);
+    /* the variants some scene ran (a Catmull-Rom scene may run fewer than --variants) */
+    int ran[VARIANT_COUNT] = {0};
+    for (int s = 0; s < o.scene_count; s++)
+        for (int i = 0; i < VARIANT_COUNT; i++)
+            ran[i] |= results[s].selected[i];
+    const char *chart_note = tsv ? draw_chart(&o, results, o.scene_count, ran, note, sizeof note) : "no TSV, no chart";
+    print_ablation_table(&o, results, o.scene_count, ran);
+    print_tradeoff_table(&o, results, o.scene_count, ran, chart_note);
     printf("\nTSV: %s; %s\n", tsv ? o.tsv_path : "not written", chart_note);
     return failures ? 1 : 0;
 }

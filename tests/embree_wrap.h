@@ -31,7 +31,8 @@ enum {
     EMB_FLAT_BSPLINE = 2,
     EMB_FLAT_CATMULL_ROM = 3,
     EMB_FLAT_HERMITE = 4, /* needs tangents */
-    EMB_FLAT_LINEAR = 5
+    EMB_FLAT_LINEAR = 5,
+    EMB_ROUND_CATMULL_ROM = 6 /* swept sphere along Catmull-Rom segments (the bench's yeti scene) */
 };
 
 typedef struct emb_scene {
@@ -92,12 +93,13 @@ static inline emb_scene *emb__build_curve_steps(const float *const *time_vertice
 {
     static const enum RTCGeometryType types[] = {
         RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE, RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE, RTC_GEOMETRY_TYPE_FLAT_BSPLINE_CURVE,
-        RTC_GEOMETRY_TYPE_FLAT_CATMULL_ROM_CURVE, RTC_GEOMETRY_TYPE_FLAT_HERMITE_CURVE, RTC_GEOMETRY_TYPE_FLAT_LINEAR_CURVE};
+        RTC_GEOMETRY_TYPE_FLAT_CATMULL_ROM_CURVE, RTC_GEOMETRY_TYPE_FLAT_HERMITE_CURVE, RTC_GEOMETRY_TYPE_FLAT_LINEAR_CURVE,
+        RTC_GEOMETRY_TYPE_ROUND_CATMULL_ROM_CURVE};
     if (memory_bytes)
         *memory_bytes = 0;
     if (build_seconds)
         *build_seconds = 0.0;
-    if (type < 0 || type > EMB_FLAT_LINEAR || (type == EMB_FLAT_HERMITE) != (tangents != NULL)) {
+    if (type < 0 || type > EMB_ROUND_CATMULL_ROM || (type == EMB_FLAT_HERMITE) != (tangents != NULL)) {
         fprintf(stderr, "emb_build: unknown curve type %d (or tangents for the wrong type)\n", type);
         return NULL;
     }

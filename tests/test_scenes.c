@@ -178,6 +178,218 @@ static void test_generators(void)
 }
 
 /* ------------------------------------------------------------------------ */
+/* Yeti-class Catmull-Rom fur */
+
+/* Point u (x, y, z, r) of the uniform Catmull-Rom segment through p[0..3],
+   from its own basis polynomials rather than a Bezier form. */
+static void catmull_rom_point(const float *p, double u, double out[4])
+{
+    double u2 = u * u, u3 = u2 * u;
+    double w[4] = {0.5 * (-u3 + 2.0 * u2 - u), 0.5 * (3.0 * u3 - 5.0 * u2 + 2.0), 0.5 * (-3.0 * u3 + 4.0 * u2 + u),
+                   0.5 * (u3 - u2)};
+    for (int c = 0; c < 4; c++)
+        out[c] = w[0] * p[c] + w[1] * p[4 + c] + w[2] * p[8 + c] + w[3] * p[12 + c];
+}
+
+static void bezier_point(const float *b, double u, double out[4])
+{
+    double v = 1.0 - u, w[4] = {v * v * v, 3.0 * u * v * v, 3.0 * u * u * v, u * u * u};
+    for (int c = 0; c < 4; c++)
+        out[c] = w[0] * b[c] + w[1] * b[4 + c] + w[2] * b[8 + c] + w[3] * b[12 + c];
+}
+
+/* Distance from p to the capsule's axis segment (scene_yeti's body). */
+static double capsule_axis_distance(const float *p)
+{
+    const double length = sqrt(0.8 * 0.8 + 0.3 * 0.3 + 0.5 * 0.5);
+    const double axis[3] = {0.8 / length, 0.3 / length, -0.5 / length};
+    double along = p[0] * axis[0] + p[1] * axis[1] + p[2] * axis[2], d2 = 0.0;
+    along = along < -0.75 ? -0.75 : along > 0.75 ? 0.75 : along;
+    for (int k = 0; k < 3; k++)
+        d2 += (p[k] - along * axis[k]) * (p[k] - along * axis[k]);
+    return sqrt(d2);
+}
+
+/* The strand layout, roots, taper and conversion of scene_yeti, and Embree's
+   Catmull-Rom curves on its shared points against Embree's Bezier curves on
+   scene_to_bezier's copy (the same surface). */
+static void test_yeti(void)
+{
+    enum { SEGMENTS = SCENE_YETI_SEGMENTS, POINTS = SCENE_YETI_POINTS, BANDS = 10 };
+    const size_t target = 40000;
+    hair_scene a, b, c, bezier;
+    double start = scene_now();
+    int result = scene_yeti(&a, target, 7);
+    double seconds = scene_now() - start;
+    result |= scene_yeti(&b, target, 7) | scene_yeti(&c, target, 8);
+    check(result == 0, "yeti: generated");
+    if (result != 0)
+        return;
+    size_t strands = a.segment_count / SEGMENTS;
+    check(a.basis == SCENE_BASIS_CATMULL_ROM && a.segment_count == target && a.vertex_count == strands * POINTS &&
+              strcmp(a.name, "yeti") == 0,
+          "yeti: Catmull-Rom, %zu segments, %zu points (%zu strands of %d points)", a.segment_count, a.vertex_count,
+          strands, POINTS);
+    int indices_ok = 1, padding_ok = ((uintptr_t)a.vertices % 16) == 0;
+    for (size_t k = 0; k < strands; k++)
+        for (size_t j = 0; j < SEGMENTS; j++)
+            indices_ok &= a.indices[SEGMENTS * k + j] == POINTS * k + j;
+    for (int i = 0; i < 4; i++)
+        padding_ok &= a.vertices[4 * a.vertex_count + (size_t)i] == 0.0f;
+    check(indices_ok, "yeti: segment j of strand k starts at point 19 k + j (its 4 points shared with neighbours)");
+    check(padding_ok, "yeti: vertices 16-byte aligned, 16 zero bytes after them");
+    check(memcmp(a.vertices, b.vertices, 16 * a.vertex_count) == 0 &&
+              memcmp(a.indices, b.indices, 4 * a.segment_count) == 0 && memcmp(a.lower, b.lower, sizeof a.lower) == 0,
+          "yeti: same seed gives identical bytes");
+    check(memcmp(a.vertices, c.vertices, 16 * a.vertex_count) != 0, "yeti: another seed gives another scene");
+
+    /* each strand: finite points, root on the skin, nothing inside the
+       body, 0.15-0.25 long, radius shrinking from root to tip */
+    size_t bad_strands = 0, band_counts[BANDS] = {0}, diagonal = 0;
+    for (size_t k = 0; k < strands; k++) {
+        const float *p = a.vertices + 4 * POINTS * k;
+        int ok = 1;
+        double length = 0.0;
+        for (size_t i = 0; i < 4 * POINTS; i++)
+            ok &= isfinite(p[i]) != 0;
+        ok &= fabs(capsule_axis_distance(p + 4) - 0.5) < 1e-5;
+        for (int i = 1; i <= SEGMENTS + 1; i++)
+            ok &= capsule_axis_distance(p + 4 * i) > 0.5 - 1e-5 && p[4 * i + 3] > 0.0f;
+        for (int i = 1; i <= SEGMENTS; i++) {
+            double d2 = 0.0;
+            for (int axis = 0; axis < 3; axis++)
+                d2 += (p[4 * (i + 1) + axis] - p[4 * i + axis]) * (p[4 * (i + 1) + axis] - p[4 * i + axis]);
+            length += sqrt(d2);
+            ok &= p[4 * (i + 1) + 3] < p[4 * i + 3];
+        }
+        ok &= length > 0.15 - 1e-4 && length < 0.25 + 1e-4;
+        bad_strands += !ok;
+        /* the root's place along the axis, from -1.25 to 1.25 */
+        const double axis_length = sqrt(0.8 * 0.8 + 0.3 * 0.3 + 0.5 * 0.5);
+        double along = (0.8 * p[4] + 0.3 * p[5] - 0.5 * p[6]) / axis_length;
+        int band = (int)((along + 1.25) / 2.5 * BANDS);
+        band_counts[band < 0 ? 0 : band >= BANDS ? BANDS - 1 : band]++;
+        /* the middle of the strand: not along a coordinate axis */
+        double mid[3], mid_length = 0.0, largest = 0.0;
+        for (int axis = 0; axis < 3; axis++) {
+            mid[axis] = p[4 * (SEGMENTS / 2 + 2) + axis] - p[4 * (SEGMENTS / 2 + 1) + axis];
+            mid_length += mid[axis] * mid[axis];
+        }
+        for (int axis = 0; axis < 3; axis++)
+            largest = fmax(largest, fabs(mid[axis]) / sqrt(mid_length));
+        diagonal += largest < 0.9;
+    }
+    check(bad_strands == 0, "yeti: every strand finite, rooted on the capsule, outside it, 0.15-0.25 long, tapering "
+                            "(%zu not)", bad_strands);
+    /* equal axial bands of a capsule have equal area (Archimedes), so an even cover puts as many roots in each */
+    size_t fewest = strands, most = 0;
+    for (int band = 0; band < BANDS; band++) {
+        fewest = band_counts[band] < fewest ? band_counts[band] : fewest;
+        most = band_counts[band] > most ? band_counts[band] : most;
+    }
+    check(fewest > strands / BANDS * 95 / 100 && most < strands / BANDS * 105 / 100,
+          "yeti: roots even along the body: %zu-%zu of %zu strands in each of %d equal-area bands", fewest, most,
+          strands, BANDS);
+    /* directions uniform on the sphere have no component above 0.9 70% of the time; fur
+       combed along a coordinate axis, hardly ever */
+    check(diagonal > strands * 6 / 10, "yeti: %zu of %zu strands run diagonally to the axes mid-way (no component "
+                                       "above 0.9; isotropic directions: 70%%)", diagonal, strands);
+
+    /* the Bezier form against the Catmull-Rom polynomials, joints, bounds */
+    int converted = 1, joints = 1, bounded = 1;
+    double worst = 0.0;
+    for (size_t i = 0; i < a.segment_count; i++) {
+        float control[16], next[16];
+        const float *p = a.vertices + 4 * (size_t)a.indices[i];
+        scene_segment_bezier(&a, i, control);
+        for (int step = 0; step <= 8; step++) {
+            double want[4], got[4];
+            catmull_rom_point(p, step / 8.0, want);
+            bezier_point(control, step / 8.0, got);
+            for (int k = 0; k < 4; k++) {
+                worst = fmax(worst, fabs(got[k] - want[k]) / (k == 3 ? fabs(want[3]) : 1.0));
+                if (k < 3) /* the bounds are float sums: 1e-6 of rounding */
+                    bounded &= got[k] - got[3] >= a.lower[k] - 1e-6 && got[k] + got[3] <= a.upper[k] + 1e-6;
+            }
+        }
+        converted &= control[0] == p[4] && control[12] == p[8];
+        if (i % SEGMENTS != SEGMENTS - 1) {
+            scene_segment_bezier(&a, i + 1, next);
+            joints &= memcmp(control + 12, next, 4 * sizeof(float)) == 0;
+        }
+    }
+    converted &= worst < 1e-6;
+    check(converted, "yeti: Bezier form runs from point 2 to point 3 and traces the Catmull-Rom polynomials "
+                     "(worst %.2g: absolute in position, relative in radius)", worst);
+    check(joints, "yeti: along a strand each segment starts where the last ended, to the bit");
+    check(bounded, "yeti: bounds hold the tube at 9 points of every segment");
+
+    result = scene_to_bezier(&a, &bezier);
+    check(result == 0 && bezier.basis == SCENE_BASIS_BEZIER && bezier.segment_count == a.segment_count &&
+              bezier.vertex_count == 4 * a.segment_count,
+          "yeti: scene_to_bezier makes %zu independent Bezier segments", bezier.segment_count);
+    if (result == 0) {
+        int same = 1;
+        for (size_t i = 0; i < a.segment_count; i++) {
+            float control[16];
+            scene_segment_bezier(&a, i, control);
+            same &= bezier.indices[i] == 4 * i && memcmp(bezier.vertices + 16 * i, control, sizeof control) == 0;
+        }
+        for (int axis = 0; axis < 3; axis++)
+            same &= bezier.lower[axis] == a.lower[axis] && bezier.upper[axis] == a.upper[axis];
+        check(same, "yeti: scene_to_bezier's segments and bounds are the scene's");
+
+        /* Embree reads the shared points as Catmull-Rom curves: the same hits as its Bezier curves on the copy */
+        const int side = 256;
+        size_t rays = (size_t)side * side, hits = 0, disagree = 0, both = 0, close = 0;
+        float *org = (float *)malloc(12 * rays), *dir = (float *)malloc(12 * rays);
+        emb_scene *curves = emb_build_curves(a.vertices, a.vertex_count, a.indices, a.segment_count,
+                                             EMB_FLAT_CATMULL_ROM, NULL, 16, 0, NULL, NULL);
+        emb_scene *copy = emb_build(bezier.vertices, bezier.vertex_count, bezier.indices, bezier.segment_count,
+                                    EMB_FLAT_BEZIER, 16, 0, NULL, NULL);
+        check(curves && copy, "yeti: Embree builds flat Catmull-Rom curves on the shared points, and Bezier curves");
+        if (curves && copy && org && dir) {
+            scene_camera_rays(&a, side, side, org, dir);
+            for (size_t i = 0; i < rays; i++) {
+                float t1 = 0.0f, t2 = 0.0f;
+                uint32_t prim1 = 0, prim2 = 0;
+                int hit1 = emb_intersect(curves, org + 3 * i, 0.0f, dir + 3 * i, INFINITY, &t1, NULL, NULL, &prim1);
+                int hit2 = emb_intersect(copy, org + 3 * i, 0.0f, dir + 3 * i, INFINITY, &t2, NULL, NULL, &prim2);
+                hits += (size_t)hit1;
+                disagree += hit1 != hit2;
+                if (hit1 && hit2 && prim1 == prim2) {
+                    both++;
+                    close += fabsf(t1 - t2) <= 1e-4f * t2;
+                }
+            }
+            info("yeti: Embree Catmull-Rom against Bezier: %zu of %zu camera rays hit, %zu disagree, t within 1e-4 "
+                 "on %zu of %zu same-segment hits", hits, rays, disagree, close, both);
+            check(hits > rays / 10, "yeti: %zu of %zu camera rays hit the fur", hits, rays);
+            check(disagree <= rays / 1000 && close >= both - both / 1000,
+                  "yeti: Embree's Catmull-Rom and Bezier curves agree: %zu hit/miss disagreements, t on %zu of %zu",
+                  disagree, close, both);
+        }
+        emb_free(curves);
+        emb_free(copy);
+        free(org);
+        free(dir);
+    }
+    print_bounds(&a);
+    info("yeti: %.2f bytes a segment (16 a point, 4 an index), generated in %.3f s", 
+         (16.0 * (double)a.vertex_count + 4.0 * (double)a.segment_count) / (double)a.segment_count, seconds);
+    scene_free(&a);
+    scene_free(&b);
+    scene_free(&c);
+    scene_free(&bezier);
+
+    check(scene_yeti(&a, 0, 1) == 0 && a.segment_count == SEGMENTS, "yeti: a tiny target gives one strand");
+    scene_free(&a);
+    check(scene_yeti(&a, SIZE_MAX, 1) != 0 && a.vertices == NULL && a.indices == NULL &&
+              scene_yeti(&a, (size_t)UINT32_MAX, 1) != 0 && a.vertices == NULL,
+          "yeti: more points than uint32 indices reach is an error, nothing allocated");
+}
+
+/* ------------------------------------------------------------------------ */
 /* .hair loader */
 
 static int write_file(const char *path, const unsigned char *data, size_t size)
@@ -532,6 +744,7 @@ int main(void)
 
     test_catmull_rom();
     test_generators();
+    test_yeti();
     test_hair_format();
     test_straight_hair(straight_path);
     test_furball(furball_path);
