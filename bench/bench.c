@@ -1535,6 +1535,23 @@ static void tsv_number(FILE *f, const char *format, double value)
         fputs("\tNaN", f); /* gnuplot skips NaN */
 }
 
+/* The accuracy columns of a TSV row: rays, disagreements, their percentage,
+   |dt| median, p99 and max, |du| median and p99 (NULL: not measured). */
+static void tsv_accuracy(FILE *f, const accuracy_summary *a)
+{
+    if (!a) {
+        fputs("\t0\t0\tNaN\tNaN\tNaN\tNaN\tNaN\tNaN", f);
+        return;
+    }
+    fprintf(f, "\t%zu\t%zu", a->rays, a->disagreements);
+    tsv_number(f, "\t%.6g", disagreement_percent(a));
+    tsv_number(f, "\t%.6g", a->t_median);
+    tsv_number(f, "\t%.6g", a->t_p99);
+    tsv_number(f, "\t%.6g", a->t_max);
+    tsv_number(f, "\t%.6g", a->u_median);
+    tsv_number(f, "\t%.6g", a->u_p99);
+}
+
 static FILE *tsv_open(const options *o)
 {
     FILE *f = fopen(o->tsv_path, "w");
@@ -1589,18 +1606,7 @@ static void tsv_write_scene(FILE *f, const options *o, const scene_result *sr, c
         for (int k = 0; k < RAY_KIND_COUNT; k++)
             for (int t = 0; t < o->thread_count_count; t++)
                 tsv_number(f, "\t%.4f", r->mrays[k][t].median);
-        if (r->has_accuracy) {
-            const accuracy_summary *a = &r->accuracy;
-            fprintf(f, "\t%zu\t%zu", a->rays, a->disagreements);
-            tsv_number(f, "\t%.6g", disagreement_percent(a));
-            tsv_number(f, "\t%.6g", a->t_median);
-            tsv_number(f, "\t%.6g", a->t_p99);
-            tsv_number(f, "\t%.6g", a->t_max);
-            tsv_number(f, "\t%.6g", a->u_median);
-            tsv_number(f, "\t%.6g", a->u_p99);
-        } else {
-            fputs("\t0\t0\tNaN\tNaN\tNaN\tNaN\tNaN\tNaN", f);
-        }
+        tsv_accuracy(f, r->has_accuracy ? &r->accuracy : NULL);
         fprintf(f, "\t%d\t%s", variant_comparable(v, sr->basis), v->on_chart ? (hairobb ? "hairobb" : "embree") : "-");
         for (int k = 0; k < RAY_KIND_COUNT; k++)
             for (int t = 0; t < o->thread_count_count; t++) {
@@ -2504,18 +2510,7 @@ static void motion_tsv(const options *o, const hair_scene *s, motion_result resu
                         tsv_number(f, "\t%.4f", x[j]->max);
                     }
                 }
-            if (r->has_accuracy) {
-                const accuracy_summary *a = &r->accuracy;
-                fprintf(f, "\t%zu\t%zu", a->rays, a->disagreements);
-                tsv_number(f, "\t%.6g", disagreement_percent(a));
-                tsv_number(f, "\t%.6g", a->t_median);
-                tsv_number(f, "\t%.6g", a->t_p99);
-                tsv_number(f, "\t%.6g", a->t_max);
-                tsv_number(f, "\t%.6g", a->u_median);
-                tsv_number(f, "\t%.6g", a->u_p99);
-            } else {
-                fputs("\t0\t0\tNaN\tNaN\tNaN\tNaN\tNaN\tNaN", f);
-            }
+            tsv_accuracy(f, r->has_accuracy ? &r->accuracy : NULL);
             fputs("\n", f);
         }
     fclose(f);

@@ -442,6 +442,21 @@ static inline int scene_motion_steps(const hair_scene *s, scene_motion motion, d
 /* Procedural scenes. Each has about target_segments segments and depends only
    on (target_segments, seed). Return 0 on success. */
 
+/* The comb field at a root of the given normal: toward `toward` within the
+   tangent plane plus half a swirl about swirl_axis (both terms shrink to
+   zero at the poles, but their direction stays smooth; at the exact pole
+   any tangent will do), then a random twist of up to 0.15 rad per strand. */
+static inline scene_vec3 scene_comb_direction(scene_vec3 normal, scene_vec3 toward, scene_vec3 swirl_axis, scene_rng *rng)
+{
+    scene_vec3 along = scene_v3_sub(toward, scene_v3_scale(normal, scene_v3_dot(normal, toward)));
+    scene_vec3 swirl = scene_v3_cross(swirl_axis, normal);
+    scene_vec3 comb = scene_v3_add(along, scene_v3_scale(swirl, 0.5f));
+    comb = scene_v3_length(comb) > 1e-6f ? scene_v3_normalize(comb) : scene_v3_perpendicular(normal);
+    float twist = scene_rng_range(rng, -0.15f, 0.15f);
+    scene_vec3 side = scene_v3_cross(normal, comb);
+    return scene_v3_add(scene_v3_scale(comb, cosf(twist)), scene_v3_scale(side, sinf(twist)));
+}
+
 /* Combed fur on the unit sphere: 8 segments per strand, 0.3-0.5 long, leaving
    the surface 17-29 degrees off the normal and bending over, mostly near the
    root, to 77-86 degrees (nearly flat) toward a smooth comb field
@@ -462,16 +477,7 @@ static inline int scene_combed(hair_scene *s, size_t target_segments, uint64_t s
     const scene_vec3 down = scene_v3(0, -1, 0), up = scene_v3(0, 1, 0);
     for (size_t k = 0; k < strand_count; k++) {
         scene_vec3 normal = scene_sphere_root(k, strand_count, &rng);
-        /* Comb field: both terms shrink to zero at the poles but their
-           direction stays smooth; at the exact pole any tangent will do. */
-        scene_vec3 meridian = scene_v3_sub(down, scene_v3_scale(normal, scene_v3_dot(normal, down)));
-        scene_vec3 swirl = scene_v3_cross(up, normal);
-        scene_vec3 comb = scene_v3_add(meridian, scene_v3_scale(swirl, 0.5f));
-        comb = scene_v3_length(comb) > 1e-6f ? scene_v3_normalize(comb) : scene_v3_perpendicular(normal);
-        /* per-strand variation: a small twist of the comb direction */
-        float twist = scene_rng_range(&rng, -0.15f, 0.15f);
-        scene_vec3 side = scene_v3_cross(normal, comb);
-        comb = scene_v3_add(scene_v3_scale(comb, cosf(twist)), scene_v3_scale(side, sinf(twist)));
+        scene_vec3 comb = scene_comb_direction(normal, down, up, &rng);
 
         float length = scene_rng_range(&rng, 0.3f, 0.5f);
         float bend_root = scene_rng_range(&rng, 0.3f, 0.5f);
@@ -756,14 +762,7 @@ static inline int scene_yeti(hair_scene *s, size_t target_segments, uint64_t see
         normal = scene_v3_length(normal) > 0.0f ? scene_v3_normalize(normal) : axis_u;
         root = scene_v3_add(centre, scene_v3_scale(normal, body_radius));
 
-        /* comb field: both terms vanish at the capsule's poles, where any tangent will do */
-        scene_vec3 toward_tail = scene_v3_sub(tail, scene_v3_scale(normal, scene_v3_dot(normal, tail)));
-        scene_vec3 swirl = scene_v3_cross(axis, normal);
-        scene_vec3 comb = scene_v3_add(toward_tail, scene_v3_scale(swirl, 0.5f));
-        comb = scene_v3_length(comb) > 1e-6f ? scene_v3_normalize(comb) : scene_v3_perpendicular(normal);
-        float twist = scene_rng_range(&rng, -0.15f, 0.15f);
-        scene_vec3 side = scene_v3_cross(normal, comb);
-        comb = scene_v3_add(scene_v3_scale(comb, cosf(twist)), scene_v3_scale(side, sinf(twist)));
+        scene_vec3 comb = scene_comb_direction(normal, tail, axis, &rng);
 
         float length = scene_rng_range(&rng, 0.15f, 0.25f);
         float bend_root = scene_rng_range(&rng, 0.3f, 0.5f);
