@@ -132,7 +132,7 @@ static float skin_hit(const float o[3], const float d[3], float tmax)
 /* Radiance of one camera ray; *rays counts the rays traced. */
 static void shade(const float dir[3], float out[3], long *rays, int *hit_any)
 {
-    traced_ray camera = {{{R.eye[0], R.eye[1], R.eye[2]}, 0.0f, {dir[0], dir[1], dir[2]}, INFINITY}, 0, 1.0f};
+    traced_ray camera = {{{R.eye[0], R.eye[1], R.eye[2]}, 0.0f, {dir[0], dir[1], dir[2]}, INFINITY, 0.0f}, 0, 1.0f};
     hairobb_hit hit;
     int is_hair = hairobb_intersect1(R.bvh, &camera.ray, &hit), l, k;
     float ts = skin_hit(R.eye, dir, is_hair ? hit.t : INFINITY), V[3] = {-dir[0], -dir[1], -dir[2]};
@@ -148,7 +148,7 @@ static void shade(const float dir[3], float out[3], long *rays, int *hit_any)
         for (k = 0; k < 3; k++) P[k] = R.eye[k] + ts * dir[k];
         for (k = 0; k < 3; k++) out[k] = 0.02f;
         for (l = 0; l < 2; l++) {
-            traced_ray sh = {{{P[0], P[1], P[2]}, 1e-4f, {R.light[l][0], R.light[l][1], R.light[l][2]}, INFINITY}, 1, 1.0f};
+            traced_ray sh = {{{P[0], P[1], P[2]}, 1e-4f, {R.light[l][0], R.light[l][1], R.light[l][2]}, INFINITY, 0.0f}, 1, 1.0f};
             float ndl = dot3(P, R.light[l]) / R.sc->skin;
             if (ndl <= 0) continue;
             ++*rays;
@@ -174,7 +174,7 @@ static void shade(const float dir[3], float out[3], long *rays, int *hit_any)
         /* The shadow ray starts at the hit and names it, so the ribbon it
            leaves is skipped while touching hairs still shadow it; the
            filter dims it by each strand it crosses. */
-        traced_ray sh = {{{P[0], P[1], P[2]}, 0.0f, {L[0], L[1], L[2]}, INFINITY}, 1, 1.0f};
+        traced_ray sh = {{{P[0], P[1], P[2]}, 0.0f, {L[0], L[1], L[2]}, INFINITY, 0.0f}, 1, 1.0f};
         if (skin_hit(P, L, INFINITY) < INFINITY) lit = 0.0f;
         else { ++*rays; lit = hairobb_occluded1_from(R.bvh, &hit, &sh.ray) ? 0.0f : sh.transmitted; }
         for (k = 0; k < 3; k++)

@@ -133,22 +133,23 @@ static int bad_point(const float *p)
 }
 
 /* Whether the result is one the documented errors of a motion build allow:
-   each error the input has (time_vertices or a step NULL, another basis, no
-   segments: INVALID_ARGUMENT; an index past the vertices:
+   each error the input has (time_vertices or a step NULL, Hermite (its
+   tangents do not move), no segments: INVALID_ARGUMENT; an index past the vertices:
    INDEX_OUT_OF_RANGE; a bad control point at any step: INVALID_GEOMETRY)
    may be the one reported; with none, the build succeeds (or runs out of
    memory). */
 static int motion_result_allowed(hairobb_result result, const motion_input *m, const hairobb_build_options *options,
                                  size_t vertex_count, const uint32_t *indices, size_t segments)
 {
-    int argument = segments == 0 || m->steps_null || m->null_step < (int)m->time_steps || options->basis != HAIROBB_BASIS_BEZIER;
+    int argument = segments == 0 || m->steps_null || m->null_step < (int)m->time_steps || options->basis == HAIROBB_BASIS_HERMITE;
+    unsigned points = options->basis == HAIROBB_BASIS_LINEAR || options->basis == HAIROBB_BASIS_HERMITE ? 2u : 4u;
     int index = 0, geometry = 0;
     size_t i;
     unsigned k, j;
     for (i = 0; i < segments; ++i) {
-        if ((size_t)indices[i] + 4 > vertex_count) { index = 1; continue; }
+        if ((size_t)indices[i] + points > vertex_count) { index = 1; continue; }
         for (k = 0; k < m->time_steps; ++k)
-            for (j = 0; j < 4; ++j) geometry |= bad_point(m->steps[k] + 4 * ((size_t)indices[i] + j));
+            for (j = 0; j < points; ++j) geometry |= bad_point(m->steps[k] + 4 * ((size_t)indices[i] + j));
     }
     if (result == HAIROBB_ERROR_INVALID_ARGUMENT) return argument;
     if (result == HAIROBB_ERROR_INDEX_OUT_OF_RANGE) return index;
