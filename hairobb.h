@@ -1746,6 +1746,15 @@ static void hairobb__ref_box_steps(const hairobb__builder *b, size_t i, const ha
     }
 }
 
+/* The box of a moving reference over every step: its union. */
+static void hairobb__ref_box_union(const hairobb__builder *b, size_t i, const hairobb__frame_prep *f, const float *centre,
+                                   const float *row_norms, hairobb__b4 *lower, hairobb__b4 *upper)
+{
+    float scratch[16];
+    hairobb__segment_box_v4(hairobb__ref_points(b, i, scratch), f, centre, row_norms, lower, upper);
+    hairobb__ref_box_steps(b, i, f, centre, row_norms, lower, upper);
+}
+
 /* The box of a moving reference: over every step (the union), or at
    mid-time (the middle step, or halfway between the two around it) for
    the SAH where nodes store linear bounds, whose boxes follow the hair at
@@ -1758,8 +1767,7 @@ static void hairobb__ref_box_moving(const hairobb__builder *b, size_t i, const h
     float first[16], second[16], mid[16];
     const float *p;
     if (!b->sah_mid_time) {
-        hairobb__segment_box_v4(hairobb__ref_points(b, i, first), f, centre, row_norms, lower, upper);
-        hairobb__ref_box_steps(b, i, f, centre, row_norms, lower, upper);
+        hairobb__ref_box_union(b, i, f, centre, row_norms, lower, upper);
         return;
     }
     p = hairobb__ref_points_in(b, b->time_vertices[k], i, first);
@@ -2851,13 +2859,14 @@ static void hairobb__write_moving_boxes(const hairobb__builder *b, unsigned char
     memcpy(node_centre, centre, 3 * sizeof(float));
     for (i = 0; i < count; ++i) hairobb__node_box_ends(b, &ranges[i], frames[per_child ? i : 0], node_centre, lower[i], upper[i]);
     hairobb__store_compressed_ends(step, planes, count, (const float (*)[2][3])lower, (const float (*)[2][3])upper);
-    if (per_child)   /* empty lanes as a still node's: the identity, a point box at -128 steps */
+    if (per_child) {   /* empty lanes as a still node's: the identity, a point box at -128 steps */
+        hairobb__compressed_obb_node *node = HAIROBB__CAST(hairobb__compressed_obb_node *, (void *)node_memory);
         for (i = count; i < HAIROBB__W; ++i) {
-            hairobb__compressed_obb_node *node = HAIROBB__CAST(hairobb__compressed_obb_node *, (void *)node_memory);
             node->rotation[0][i] = node->rotation[4][i] = node->rotation[8][i] = 127;
             for (e = 0; e < 2; ++e)
                 for (k = 0; k < 6; ++k) planes[e][k * HAIROBB__W + i] = -128;
         }
+    }
 }
 
 /* Writes the boxes of a node's children, child i bounding the references
@@ -3497,9 +3506,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
         for (i = 0; i < segment_count; ++i) {
             hairobb__b4 lo, hi;
             float lower[3], upper[3];
-            float scratch[16];
-            hairobb__segment_box_v4(hairobb__ref_points(&b, i, scratch), &world, NULL, NULL, &lo, &hi);
-            hairobb__ref_box_steps(&b, i, &world, NULL, NULL, &lo, &hi);
+            hairobb__ref_box_union(&b, i, &world, NULL, NULL, &lo, &hi);
             hairobb__b4_store3(lower, lo);
             hairobb__b4_store3(upper, hi);
             hairobb__box_grow(bvh->lower, bvh->upper, lower, upper);
@@ -3645,7 +3652,7 @@ static float hairobb__child_area(const unsigned char *node_memory, unsigned type
     } else {
         float frames[HAIROBB__W][9], end[3];
         const float *step, *frame;
-        const signed char *planes;
+        const signed char *planes, *ends;
         if (HAIROBB__STILL_TYPE(type) == HAIROBB__REF_QOBB_PER_CHILD) {
             /* this lane's rotation, decoded as hairobb__node_frames decodes it */
             const hairobb__compressed_obb_node *node = HAIROBB__CAST(const hairobb__compressed_obb_node *, (const void *)node_memory);
@@ -3658,14 +3665,14 @@ static float hairobb__child_area(const unsigned char *node_memory, unsigned type
             frame = frames[0];
             step = node->step; planes = node->lower[0];
         }
+        ends = HAIROBB__MOVING(type) ? HAIROBB__CAST(const signed char *, (const void *)(node_memory + hairobb__node_size(type))) : NULL;
         for (k = 0; k < 3; ++k) {
             float scale = step[k] / sqrtf(hairobb__dot3(frame + 3 * k, frame + 3 * k));
-            const signed char *ends = HAIROBB__CAST(const signed char *, (const void *)(node_memory + hairobb__node_size(type)));
             extent[k] = (float)(planes[(3 + k) * HAIROBB__W + lane] - planes[k * HAIROBB__W + lane]) * scale;
-            if (HAIROBB__MOVING(type)) end[k] = (float)(ends[(3 + k) * HAIROBB__W + lane] - ends[k * HAIROBB__W + lane]) * scale;
+            if (ends) end[k] = (float)(ends[(3 + k) * HAIROBB__W + lane] - ends[k * HAIROBB__W + lane]) * scale;
         }
         /* a moving box's extents are lines in time: the mean of their products over [0, 1] */
-        if (HAIROBB__MOVING(type)) {
+        if (ends) {
             float area = 0.0f;
             for (k = 0; k < 3; ++k) {
                 int j = (k + 1) % 3;

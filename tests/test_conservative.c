@@ -111,19 +111,6 @@ static void batch_rays(ray_batch *b, const hair_scene *bounds, int side)
     free(dir);
 }
 
-/* Control points at `time` as the reference reads them: each float lerped
-   in double between the two steps around it, then rounded (as
-   tests/test_motion.c's ref_trace does). */
-static void points_at_time(float *const *steps, int time_steps, size_t vertex_count, float time, float *out)
-{
-    double f = (double)time * (time_steps - 1), w;
-    int k = (int)f;
-    size_t i;
-    if (k > time_steps - 2) k = time_steps - 2;
-    w = f - k;
-    for (i = 0; i < 4 * vertex_count; ++i) out[i] = (float)((1.0 - w) * (double)steps[k][i] + w * (double)steps[k + 1][i]);
-}
-
 /* The reference's hits on every ray of the batch, at each ray's time
    (steps NULL: the scene as it is). A reference is built for each run of
    rays at one time, so the batch keeps rays of one time together. */
@@ -138,7 +125,7 @@ static void batch_reference(ray_batch *b, const hair_scene *s, float *const *ste
         const hairobb_ray *ray = &b->rays[i];
         if (!reference || ray->time != built_for) {
             ref_free(reference);
-            if (steps) points_at_time(steps, time_steps, s->vertex_count, ray->time, points);
+            if (steps) ref_motion_points((const float *const *)steps, time_steps, ray->time, 0, 4 * s->vertex_count, points);
             reference = ref_build(steps ? points : s->vertices, s->vertex_count, s->indices, s->segment_count);
             built_for = ray->time;
             if (!reference) { printf("out of memory\n"); exit(1); }
