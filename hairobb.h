@@ -328,6 +328,17 @@
                              POSIX systems, the build uses pthreads: link
                              with -pthread (glibc 2.34 and later need nothing).
      HAIROBB_NO_DISPATCH     no AVX2 copy of the kernels (SIMD PATHS).
+     HAIROBB_NO_HUGE_PAGES   no madvise(MADV_HUGEPAGE). Otherwise, on Linux
+                             where <sys/mman.h> declares it (glibc or musl
+                             with _DEFAULT_SOURCE or _GNU_SOURCE, as C++ and
+                             gcc's gnu modes have; not strict -std=c99 alone),
+                             blocks of 4 MB and more that a build or a load
+                             allocates (node memory, leaf ids, the build's
+                             per-segment arrays) are advised to take 2 MB
+                             pages where the kernel has transparent huge
+                             pages in its "madvise" mode: fewer page faults
+                             while they are first written, fewer TLB misses
+                             while rays read them. Embree does the same.
      HAIROBB_SELF            the file's name as the runtime dispatch includes
                              it again, default "hairobb.h".
      HAIROBB_NODE_WIDTH      children per node, 4 or 8; default 8 where the
@@ -712,6 +723,27 @@ HAIROBB_DEF void hairobb_hair_free(hairobb_hair *hair);
 #else
 #define HAIROBB__CAST(type, x) ((type)(x))
 #endif
+
+#if defined(__linux__) && !defined(HAIROBB_NO_HUGE_PAGES)
+#include <sys/mman.h>
+#endif
+
+/* HAIROBB_MALLOC for blocks a build or load fills whole: from 4 MB on, the
+   2 MB pages inside the block are advised to be huge (HAIROBB_NO_HUGE_PAGES).
+   Only a hint: nothing changes where the kernel ignores it. */
+static void *hairobb__malloc_large(size_t bytes, void *user)
+{
+    void *block = HAIROBB_MALLOC(bytes, user);
+    (void)user;
+#if defined(__linux__) && defined(MADV_HUGEPAGE) && !defined(HAIROBB_NO_HUGE_PAGES)
+    if (block && bytes >= ((size_t)4 << 20)) {
+        const size_t huge = (size_t)2 << 20, skip = (huge - (size_t)((uintptr_t)block & (huge - 1))) & (huge - 1);
+        size_t length = (bytes - skip) & ~(huge - 1);
+        if (length) (void)madvise(HAIROBB__CAST(unsigned char *, block) + skip, length, MADV_HUGEPAGE);
+    }
+#endif
+    return block;
+}
 
 /* ------------------------------------------------------------------------ */
 /* Limits and cost model                                                     */
@@ -1175,7 +1207,7 @@ static void hairobb__to_bezier_all(hairobb_basis basis, const float *vertices, c
 static float *hairobb__convert_curves(hairobb_basis basis, const float *vertices, const uint32_t *indices,
                                       const float *tangents, size_t segment_count, void *user)
 {
-    float *curves = HAIROBB__CAST(float *, HAIROBB_MALLOC(hairobb__curve_bytes(segment_count), user));
+    float *curves = HAIROBB__CAST(float *, hairobb__malloc_large(hairobb__curve_bytes(segment_count), user));
     uint32_t *curve_indices;
     size_t i;
     if (!curves) return NULL;
@@ -1654,6 +1686,7 @@ typedef struct hairobb__builder {
     size_t task_limit;                /* ranges this small become tasks (0: none, or inside one) */
     struct hairobb__task *tasks;
     size_t task_count, task_capacity;
+    struct hairobb__pool *pool;       /* the top's: threads that run its tasks while it adds them; else NULL */
 } hairobb__builder;
 
 /* A subtree the top of the tree left to be built on its own, in its own
@@ -3053,24 +3086,38 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
     return (uint64_t)offset | node_type;
 }
 
+static void hairobb__pool_lock(struct hairobb__pool *pool, int lock);
+static void hairobb__pool_publish(struct hairobb__pool *pool, size_t task_count);
+
+/* A task for range r; with a pool, its threads may start it at once (the
+   list grows under the pool's lock, which they copy tasks out under). */
 static uint64_t hairobb__add_task(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries)
 {
-    hairobb__task *task;
+    hairobb__task task, *grown = NULL;
+    size_t capacity = b->task_capacity, index;
     if (b->task_count == b->task_capacity) {
-        size_t capacity = b->task_capacity ? 2 * b->task_capacity : 64;
-        hairobb__task *grown = HAIROBB__CAST(hairobb__task *, HAIROBB_MALLOC(capacity * sizeof *grown, b->user));
+        capacity = b->task_capacity ? 2 * b->task_capacity : 64;
+        grown = HAIROBB__CAST(hairobb__task *, HAIROBB_MALLOC(capacity * sizeof *grown, b->user));
         if (!grown) { b->error = HAIROBB_ERROR_OUT_OF_MEMORY; return HAIROBB__REF_EMPTY; }
+    }
+    memset(&task, 0, sizeof task);
+    task.range = *r;
+    task.depth = depth;
+    task.tries = tries;
+    if (b->pool) hairobb__pool_lock(b->pool, 1);
+    if (grown) {
         if (b->task_count) memcpy(grown, b->tasks, b->task_count * sizeof *grown);
         if (b->tasks) HAIROBB_FREE(b->tasks, b->user);
         b->tasks = grown;
         b->task_capacity = capacity;
     }
-    task = &b->tasks[b->task_count];
-    memset(task, 0, sizeof *task);
-    task->range = *r;
-    task->depth = depth;
-    task->tries = tries;
-    return ((uint64_t)b->task_count++ << 4) | HAIROBB__REF_TASK;
+    index = b->task_count++;
+    b->tasks[index] = task;
+    if (b->pool) {
+        hairobb__pool_publish(b->pool, b->task_count);
+        hairobb__pool_lock(b->pool, 0);
+    }
+    return ((uint64_t)index << 4) | HAIROBB__REF_TASK;
 }
 
 /* hair_space: see hairobb__find_split */
@@ -3126,6 +3173,7 @@ static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task)
     local.error = HAIROBB_OK;
     local.task_limit = 0;           /* no tasks within a task; no progress calls */
     local.tasks = NULL;
+    local.pool = NULL;
     local.task_count = local.task_capacity = 0;
     local.frame_capacity = hairobb__frame_capacity(&local, task->range.cap - task->range.begin);
     local.frame_boxes = NULL;
@@ -3154,7 +3202,10 @@ static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task)
 }
 
 /* Tasks are handed out in order; the calling thread reports progress and
-   turns a cancel into a stop for every thread. */
+   turns a cancel into a stop for every thread. A build's top starts the
+   threads before it splits (hairobb__pool_start) and adds its tasks as it
+   makes them, so they run while it works on; the calling thread joins in
+   when the top is done (hairobb__pool_finish). */
 typedef struct hairobb__pool {
     size_t task_count;                /* run(context, k) for each k < task_count */
     hairobb_task_fn run;
@@ -3163,17 +3214,32 @@ typedef struct hairobb__pool {
     hairobb__builder shared;          /* what every task starts from; never written while threads run */
     size_t next_task, positions_done;
     int stop;
+    int adding;                       /* more tasks may come: idle threads wait for them */
+    int locking;                      /* the lock and the signal exist (threads were started) */
 #if HAIROBB__THREADS
     pthread_mutex_t lock;
+    pthread_cond_t added;             /* a task came, the adding ended, or a stop */
+    pthread_t workers[255];
+    unsigned started;
 #endif
 } hairobb__pool;
 
 static void hairobb__pool_lock(hairobb__pool *pool, int lock)
 {
 #if HAIROBB__THREADS
+    if (!pool->locking) return;
     if (lock) pthread_mutex_lock(&pool->lock); else pthread_mutex_unlock(&pool->lock);
 #else
     (void)pool; (void)lock;
+#endif
+}
+
+/* Under the lock: tasks [0, task_count) may run. */
+static void hairobb__pool_publish(hairobb__pool *pool, size_t task_count)
+{
+    pool->task_count = task_count;
+#if HAIROBB__THREADS
+    if (pool->locking) pthread_cond_signal(&pool->added);
 #endif
 }
 
@@ -3182,11 +3248,17 @@ static void hairobb__work(hairobb__pool *pool, int calling_thread)
     hairobb__builder *b = pool->b;
     for (;;) {
         size_t k, done;
+        int run;
         hairobb__pool_lock(pool, 1);
-        k = pool->stop ? pool->task_count : pool->next_task;
-        if (k < pool->task_count) pool->next_task++;
+#if HAIROBB__THREADS
+        while (pool->adding && !pool->stop && pool->next_task >= pool->task_count)
+            pthread_cond_wait(&pool->added, &pool->lock);
+#endif
+        k = pool->next_task;
+        run = !pool->stop && k < pool->task_count;
+        if (run) pool->next_task++;
         hairobb__pool_lock(pool, 0);
-        if (k >= pool->task_count) return;
+        if (!run) return;
         pool->run(pool->context, (unsigned)k);
         if (!b) continue;
         hairobb__pool_lock(pool, 1);
@@ -3213,11 +3285,71 @@ static void *hairobb__worker(void *pool)
 }
 #endif
 
-/* One task, called by a user's parallel_for. */
+/* Up to `threads` - 1 threads beside the calling one (0: one per core), at
+   most one per task of most_tasks; none where threads are not built in. */
+static void hairobb__pool_start(hairobb__pool *pool, unsigned threads, size_t most_tasks)
+{
+#if HAIROBB__THREADS
+    if (threads == 0) {
+        long cores = sysconf(_SC_NPROCESSORS_ONLN);
+        threads = cores < 1 ? 1u : cores > 256 ? 256u : (unsigned)cores;
+    }
+    if (threads > most_tasks) threads = most_tasks ? (unsigned)most_tasks : 1u;
+    if (threads < 2 || pthread_mutex_init(&pool->lock, NULL) != 0) return;
+    if (pthread_cond_init(&pool->added, NULL) != 0) {
+        pthread_mutex_destroy(&pool->lock);
+        return;
+    }
+    pool->locking = 1;
+    /* fewer threads than asked, if some would not start */
+    while (pool->started < threads - 1 && pthread_create(&pool->workers[pool->started], NULL, hairobb__worker, pool) == 0)
+        ++pool->started;
+#else
+    (void)pool; (void)threads; (void)most_tasks;
+#endif
+}
+
+/* No more tasks come; the calling thread runs tasks with the others until
+   none is left, then they end. */
+static void hairobb__pool_finish(hairobb__pool *pool)
+{
+#if HAIROBB__THREADS
+    unsigned i;
+    hairobb__pool_lock(pool, 1);
+    pool->adding = 0;
+    if (pool->locking) pthread_cond_broadcast(&pool->added);
+    hairobb__pool_lock(pool, 0);
+    hairobb__work(pool, 1);
+    for (i = 0; i < pool->started; ++i) pthread_join(pool->workers[i], NULL);
+    if (pool->locking) {
+        pthread_cond_destroy(&pool->added);
+        pthread_mutex_destroy(&pool->lock);
+    }
+    pool->locking = 0;
+    pool->started = 0;
+#else
+    pool->adding = 0;
+    hairobb__work(pool, 1);
+#endif
+}
+
+/* One task, from the pool or a user's parallel_for: run on a copy, as the
+   top may move the task list meanwhile. */
 static void hairobb__run_task_at(void *pool, unsigned index)
 {
     hairobb__pool *p = HAIROBB__CAST(hairobb__pool *, pool);
-    if (index < p->b->task_count) hairobb__run_task(&p->shared, &p->b->tasks[index]);
+    hairobb__task task;
+    int listed;
+    hairobb__pool_lock(p, 1);
+    listed = index < p->b->task_count;
+    if (listed) task = p->b->tasks[index];
+    else memset(&task, 0, sizeof task);
+    hairobb__pool_lock(p, 0);
+    if (!listed) return;
+    hairobb__run_task(&p->shared, &task);
+    hairobb__pool_lock(p, 1);
+    p->b->tasks[index] = task;
+    hairobb__pool_lock(p, 0);
 }
 
 /* The tasks through a user's parallel_for, then their progress at once. */
@@ -3233,49 +3365,57 @@ static void hairobb__run_tasks_for(hairobb__pool *pool, hairobb_parallel_for_fn 
     hairobb__finish_positions(b, positions);
 }
 
-/* The tasks on up to `threads` threads (0: one per core), the calling
-   thread among them. */
+/* The tasks of a refit (or of a build without a started pool) on up to
+   `threads` threads, the calling thread among them. */
 static void hairobb__run_tasks_on_threads(hairobb__pool *pool, unsigned threads)
 {
-#if HAIROBB__THREADS
-    if (threads == 0) {
-        long cores = sysconf(_SC_NPROCESSORS_ONLN);
-        threads = cores < 1 ? 1u : cores > 256 ? 256u : (unsigned)cores;
-    }
-    if (threads > pool->task_count) threads = pool->task_count ? (unsigned)pool->task_count : 1u;
-    if (threads > 1 && pthread_mutex_init(&pool->lock, NULL) == 0) {
-        pthread_t workers[255];
-        unsigned started = 0, i;
-        while (started < threads - 1 && pthread_create(&workers[started], NULL, hairobb__worker, pool) == 0) ++started;
-        hairobb__work(pool, 1);      /* fewer threads than asked, if some would not start */
-        for (i = 0; i < started; ++i) pthread_join(workers[i], NULL);
-        pthread_mutex_destroy(&pool->lock);
-        return;
-    }
-#endif
-    (void)threads;
-    hairobb__work(pool, 1);
+    hairobb__pool_start(pool, threads, pool->task_count);
+    hairobb__pool_finish(pool);
 }
 
-/* Runs every task; the first failure, or a cancel, is left in b->error. */
-static void hairobb__run_tasks(hairobb__builder *b, unsigned threads, hairobb_parallel_for_fn parallel_for,
-                               void *parallel_for_user)
+/* The build's threads, before its top: they take its tasks as it adds them
+   (not with a user's parallel_for, which takes a count of tasks). */
+static void hairobb__start_build_pool(hairobb__builder *b, hairobb__pool *pool, unsigned threads,
+                                      hairobb_parallel_for_fn parallel_for)
 {
-    hairobb__pool pool;
+    memset(pool, 0, sizeof *pool);
+    pool->run = hairobb__run_task_at;
+    pool->context = pool;
+    pool->b = b;
+    if (parallel_for || !b->task_limit || b->capacity <= b->task_limit) return;   /* no top: one task */
+    pool->shared = *b;
+    pool->adding = 1;
+    hairobb__pool_start(pool, threads, (size_t)-1);
+    if (pool->locking) b->pool = pool;
+    else pool->adding = 0;
+}
+
+/* Runs every task; the first failure, or a cancel, is left in b->error.
+   Called after the top, whether it failed or not: the pool's threads end. */
+static void hairobb__run_tasks(hairobb__builder *b, hairobb__pool *pool, unsigned threads,
+                               hairobb_parallel_for_fn parallel_for, void *parallel_for_user)
+{
     size_t k;
-    memset(&pool, 0, sizeof pool);
-    pool.task_count = b->task_count;
-    pool.run = hairobb__run_task_at;
-    pool.context = &pool;
-    pool.b = b;
-    pool.positions_done = b->positions_done;    /* leaves of the top part */
-    pool.shared = *b;
-    if (parallel_for && b->task_count)
-        hairobb__run_tasks_for(&pool, parallel_for, parallel_for_user);
-    else
-        hairobb__run_tasks_on_threads(&pool, threads);
+    if (b->pool) {
+        hairobb__pool_lock(pool, 1);
+        pool->positions_done += b->positions_done;    /* the top's leaves, with the tasks done so far */
+        if (b->error != HAIROBB_OK) pool->stop = 1;
+        hairobb__pool_lock(pool, 0);
+        hairobb__pool_finish(pool);
+        b->pool = NULL;
+    } else {
+        if (b->error != HAIROBB_OK) return;
+        pool->task_count = b->task_count;
+        pool->positions_done = b->positions_done;    /* leaves of the top part */
+        pool->shared = *b;
+        if (parallel_for && b->task_count)
+            hairobb__run_tasks_for(pool, parallel_for, parallel_for_user);
+        else
+            hairobb__run_tasks_on_threads(pool, threads);
+    }
+    if (b->error != HAIROBB_OK) return;
     for (k = 0; k < b->task_count && b->error == HAIROBB_OK; ++k) b->error = b->tasks[k].error;
-    if (b->error == HAIROBB_OK && pool.stop) b->error = HAIROBB_ERROR_CANCELLED;
+    if (b->error == HAIROBB_OK && pool->stop) b->error = HAIROBB_ERROR_CANCELLED;
 }
 
 /* The BVH's node memory, of the nodes' size: the top's nodes, then each
@@ -3288,7 +3428,7 @@ static void hairobb__gather_tasks(hairobb__builder *b, hairobb_bvh *bvh)
         bytes += b->tasks[k].node_bytes;
     }
     if (bytes) {
-        unsigned char *allocation = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(bytes + 64, b->user));
+        unsigned char *allocation = HAIROBB__CAST(unsigned char *, hairobb__malloc_large(bytes + 64, b->user));
         if (!allocation) { b->error = HAIROBB_ERROR_OUT_OF_MEMORY; return; }
         bvh->node_allocation = allocation;
         bvh->nodes = hairobb__align64(allocation);
@@ -3393,6 +3533,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
 {
     hairobb_build_options opt;
     hairobb__builder b;
+    hairobb__pool pool;
     hairobb__range root;
     hairobb__tries tries;
     hairobb_bvh *bvh;
@@ -3462,12 +3603,12 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     b.frame_capacity = hairobb__frame_capacity(&b, b.capacity);
     bvh = HAIROBB__CAST(hairobb_bvh *, HAIROBB_MALLOC(sizeof *bvh, b.user));
     if (bvh) memset(bvh, 0, sizeof *bvh);     /* the failure path reads it */
-    b.ids = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(sizeof(uint32_t) * b.capacity, b.user));
+    b.ids = HAIROBB__CAST(uint32_t *, hairobb__malloc_large(sizeof(uint32_t) * b.capacity, b.user));
     if (opt.spatial_splits == HAIROBB_ON)
-        b.ranges = HAIROBB__CAST(float *, HAIROBB_MALLOC(2 * sizeof(float) * b.capacity, b.user));
-    b.world_boxes = HAIROBB__CAST(float *, HAIROBB_MALLOC(6 * sizeof(float) * b.capacity, b.user));
+        b.ranges = HAIROBB__CAST(float *, hairobb__malloc_large(2 * sizeof(float) * b.capacity, b.user));
+    b.world_boxes = HAIROBB__CAST(float *, hairobb__malloc_large(6 * sizeof(float) * b.capacity, b.user));
     if (b.frame_capacity)
-        b.frame_boxes = HAIROBB__CAST(float *, HAIROBB_MALLOC(6 * sizeof(float) * b.frame_capacity, b.user));
+        b.frame_boxes = HAIROBB__CAST(float *, hairobb__malloc_large(6 * sizeof(float) * b.frame_capacity, b.user));
     b.error = HAIROBB_ERROR_OUT_OF_MEMORY;
     if (!bvh || !b.ids || (opt.spatial_splits == HAIROBB_ON && !b.ranges) || !b.world_boxes ||
         (b.frame_capacity && !b.frame_boxes))
@@ -3516,10 +3657,11 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     memset(&tries, 0, sizeof tries);
     tries.enabled = HAIROBB__TRY_HAIR_SPACE | (opt.spatial_splits == HAIROBB_ON ? HAIROBB__TRY_SPATIAL : 0u) |
                     (opt.clustering == HAIROBB_ON ? HAIROBB__TRY_CLUSTER : 0u);
+    hairobb__start_build_pool(&b, &pool, opt.threads, opt.parallel_for);
     bvh->root = hairobb__build_range(&b, &root, 0, tries, NULL);
     if (b.frame_boxes) HAIROBB_FREE(b.frame_boxes, b.user);
     b.frame_boxes = NULL;
-    if (b.error == HAIROBB_OK) hairobb__run_tasks(&b, opt.threads, opt.parallel_for, opt.parallel_for_user);
+    hairobb__run_tasks(&b, &pool, opt.threads, opt.parallel_for, opt.parallel_for_user);
     /* from here on only ids, for the leaves, and the u ranges of spatial
        splits, which the leaves keep for hairobb_refit */
     HAIROBB_FREE(b.world_boxes, b.user);
@@ -3530,11 +3672,11 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
 
     /* keep exactly what tracing needs: memory_bytes reports what stays */
     b.error = HAIROBB_ERROR_OUT_OF_MEMORY;
-    bvh->leaf_prims = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(sizeof(uint32_t) * b.stats.leaf_references, b.user));
+    bvh->leaf_prims = HAIROBB__CAST(uint32_t *, hairobb__malloc_large(sizeof(uint32_t) * b.stats.leaf_references, b.user));
     if (!bvh->leaf_prims) goto failed;
     if (opt.spatial_splits == HAIROBB_ON) {
         /* hairobb_refit bounds the clipped parts again: their u ranges stay, unless none was clipped */
-        bvh->leaf_ranges = HAIROBB__CAST(float *, HAIROBB_MALLOC(2 * sizeof(float) * b.stats.leaf_references, b.user));
+        bvh->leaf_ranges = HAIROBB__CAST(float *, hairobb__malloc_large(2 * sizeof(float) * b.stats.leaf_references, b.user));
         if (!bvh->leaf_ranges) goto failed;
     }
     hairobb__finish_tree(&b, bvh->nodes, &bvh->root, 0, bvh->leaf_prims, bvh->leaf_ranges, &bvh->leaf_prim_count);
@@ -4375,7 +4517,7 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
         goto failed;
     }
     if (node_bytes) {
-        unsigned char *allocation = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC((size_t)node_bytes + 64, user));
+        unsigned char *allocation = HAIROBB__CAST(unsigned char *, hairobb__malloc_large((size_t)node_bytes + 64, user));
         if (!allocation) goto failed;
         bvh->node_allocation = allocation;
         bvh->nodes = hairobb__align64(allocation);
@@ -4385,7 +4527,7 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
         if (!check.reached) goto failed;
         memset(check.reached, 0, bvh->node_bytes / 128 + 1);
     }
-    bvh->leaf_prims = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(sizeof(uint32_t) * (size_t)leaf_prim_count, user));
+    bvh->leaf_prims = HAIROBB__CAST(uint32_t *, hairobb__malloc_large(sizeof(uint32_t) * (size_t)leaf_prim_count, user));
     if (!bvh->leaf_prims) goto failed;
     bvh->leaf_prim_count = (size_t)leaf_prim_count;
     memcpy(bvh->leaf_prims, in + HAIROBB__SAVE_HEADER + bvh->node_bytes, sizeof(uint32_t) * bvh->leaf_prim_count);
@@ -4393,7 +4535,7 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
 
     if (range_bytes) {
         /* u ranges inside [0, 1] (hairobb_refit clips the segments to them) */
-        bvh->leaf_ranges = HAIROBB__CAST(float *, HAIROBB_MALLOC(range_bytes, user));
+        bvh->leaf_ranges = HAIROBB__CAST(float *, hairobb__malloc_large(range_bytes, user));
         if (!bvh->leaf_ranges) goto failed;
         memcpy(bvh->leaf_ranges, in + HAIROBB__SAVE_HEADER + bvh->node_bytes + leaf_bytes, range_bytes);
     }

@@ -22,6 +22,7 @@
    each round (the variants of one round run seconds apart), then its
    median and spread. */
 #define _POSIX_C_SOURCE 200809L
+#define _DEFAULT_SOURCE   /* madvise(MADV_HUGEPAGE), as gnu C and C++ builds have it (HAIROBB_NO_HUGE_PAGES) */
 #define HAIROBB_IMPLEMENTATION
 
 /* --profile (bench/profile.sh): built with -DBENCH_COUNTS, the header counts

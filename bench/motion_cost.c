@@ -12,6 +12,7 @@
    Instructions a ray = the Ir callgrind reports / RES^2. Prints the tree's
    node counts, bytes a segment, SAH cost and hits. */
 #define _POSIX_C_SOURCE 200809L
+#define _DEFAULT_SOURCE   /* madvise(MADV_HUGEPAGE), as gnu C and C++ builds have it (HAIROBB_NO_HUGE_PAGES) */
 #define HAIROBB_IMPLEMENTATION
 #include "hairobb.h"
 #include "tests/scenes.h"

@@ -22,6 +22,7 @@
          --scenes combed --options default --threads 1
    Build instructions a segment = the Ir callgrind reports / segments. */
 #define _POSIX_C_SOURCE 200809L
+#define _DEFAULT_SOURCE   /* madvise(MADV_HUGEPAGE), as gnu C and C++ builds have it (HAIROBB_NO_HUGE_PAGES) */
 #include "bench/alloc_meter.h"
 #define HAIROBB_IMPLEMENTATION
 #include "hairobb.h"

@@ -23,6 +23,7 @@
      HAIROBB_ERROR_IO, an empty or truncated file, or one announcing 2^40
      node bytes, HAIROBB_ERROR_INVALID_FILE before any allocation. */
 #define _POSIX_C_SOURCE 200809L
+#define _DEFAULT_SOURCE   /* madvise(MADV_HUGEPAGE), as gnu C and C++ builds have it (HAIROBB_NO_HUGE_PAGES) */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>

@@ -21,6 +21,7 @@
    origin - the bound hairobb.h itself uses for the rounding of the ray-space
    points it evaluates. Everything else is a disagreement. */
 #define _POSIX_C_SOURCE 200809L
+#define _DEFAULT_SOURCE   /* madvise(MADV_HUGEPAGE), as gnu C and C++ builds have it (HAIROBB_NO_HUGE_PAGES) */
 #define HAIROBB_IMPLEMENTATION
 #include "../hairobb.h"
 #include "check.h"

@@ -5,6 +5,7 @@
    threads tracing one BVH at once get exactly what one thread gets. `make
    test` also runs it under ThreadSanitizer. */
 #define _POSIX_C_SOURCE 200809L
+#define _DEFAULT_SOURCE   /* madvise(MADV_HUGEPAGE), as gnu C and C++ builds have it (HAIROBB_NO_HUGE_PAGES) */
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
