@@ -336,9 +336,9 @@
                              allocates (node memory, leaf ids, the build's
                              per-segment arrays) are advised to take 2 MB
                              pages where the kernel has transparent huge
-                             pages in its "madvise" mode: fewer page faults
-                             while they are first written, fewer TLB misses
-                             while rays read them. Embree does the same.
+                             pages in its "madvise" mode: far fewer page
+                             faults while a build first writes them. Embree's
+                             BVH memory takes such pages too.
      HAIROBB_SELF            the file's name as the runtime dispatch includes
                              it again, default "hairobb.h".
      HAIROBB_NODE_WIDTH      children per node, 4 or 8; default 8 where the

@@ -107,6 +107,7 @@ typedef struct options {
     size_t save_load_segments[MAX_SAVE_LOAD];   /* --save-load: combed scenes of these sizes */
     int save_load_count;
     int motion;                     /* --motion: the motion blur study alone */
+    int builds;                     /* --builds: the build-time study alone */
 } options;
 
 static int show_progress; /* stderr is a terminal and --quiet was not given */
@@ -1828,7 +1829,11 @@ static void print_help(void)
            DEFAULT_SEGMENTS, DEFAULT_RESOLUTION, DEFAULT_ROUNDS, DEFAULT_ACCURACY_RAYS, DEFAULT_TSV_PATH,
            DEFAULT_PNG_PATH, DEFAULT_PLOT_SCRIPT, TEST_DATA_STRAIGHT_HAIR_DEFAULT, SCENE_FURBALL_DEFAULT_PATH);
     /* two strings: C99 compilers need support only 4095 characters in one */
-    printf("  --motion            only motion blur against Embree: combed fur (--segments) rotating about each\n"
+    printf("  --builds            only build time: for each --scene, --rounds rounds of hairobb's defaults on all\n"
+           "                      cores, on 1 thread, and Embree flat r4 on all cores (Catmull-Rom scenes: both\n"
+           "                      read the Catmull-Rom curves), each freed before the next; medians [min-max] of\n"
+           "                      the seconds and of the ratios to Embree within each round\n"
+           "  --motion            only motion blur against Embree: combed fur (--segments) rotating about each\n"
            "                      root (0.5 rad) or translating (0.05, 0.2), at 2 and 4 time steps, and static;\n"
            "                      hairobb's defaults and Embree flat r4 (rtcSetGeometryTimeStepCount) on the same\n"
            "                      arrays: build s, bytes/segment, primary and incoherent Mrays/s at random ray\n"
@@ -1949,6 +1954,10 @@ static int parse_options(int argc, char **argv, options *o)
         }
         if (strcmp(name, "--motion") == 0) {
             o->motion = 1;
+            continue;
+        }
+        if (strcmp(name, "--builds") == 0) {
+            o->builds = 1;
             continue;
         }
         if (!value) {
@@ -2712,6 +2721,97 @@ static int run_scene(const options *o, const char *name, const int requested[VAR
     return 0;
 }
 
+/* ======================================================================== */
+/* Build time against Embree, in rounds                                     */
+/* ======================================================================== */
+
+/* --builds: per scene, --rounds rounds of three builds, each freed before
+   the next: hairobb's defaults on all cores, the same on 1 thread, Embree
+   flat r4 on all cores (a Catmull-Rom scene: both read its Catmull-Rom
+   curves, hairobb without the copy). Medians [min-max] of the seconds, and
+   of the ratios to Embree taken within each round; hairobb's transient
+   bytes a segment (allocator meter). */
+static int run_builds(const options *o)
+{
+    enum { ALL_CORES, ONE_THREAD, EMBREE, BUILDS };
+    static const char *const names[BUILDS] = {"hairobb, all cores", "hairobb, 1 thread", "Embree flat r4, all cores"};
+    int failures = 0;
+    printf("\nbuild time in rounds (%d rounds; each round builds the three in turn, each freed before the next)\n", o->rounds);
+    printf("%-12s %12s %-26s %-24s %-24s %-18s %s\n", "scene", "segments", "build", "seconds", "/ Embree (in round)",
+           "bytes/segment", "transient b/seg");
+    for (int c = 0; c < o->scene_count; c++) {
+        hair_scene s;
+        char why[TEST_DATA_WHY_SIZE];
+        int loaded = load_scene(o, o->scenes[c], &s, why);
+        if (loaded != 0) {
+            printf("%-12s skipped: %s\n", o->scenes[c], loaded < 0 ? why : "could not be loaded");
+            failures += loaded > 0;
+            continue;
+        }
+        int catmull_rom = s.basis == SCENE_BASIS_CATMULL_ROM;
+        double seconds[BUILDS][MAX_ROUNDS], ratios[BUILDS][MAX_ROUNDS];
+        size_t memory[BUILDS] = {0, 0, 0}, transient = 0;
+        int ok = 1, builds = BUILDS;
+        char why_not[256];
+        if (!memory_fits(HAIROBB_BUILD_PEAK_BYTES_PER_SEGMENT * (double)s.segment_count, "hairobb's build", why_not,
+                         sizeof why_not)) {
+            printf("%-12s skipped: %s\n", o->scenes[c], why_not);
+            scene_free(&s);
+            continue;
+        }
+        if (!memory_fits(EMBREE_BUILD_PEAK_BYTES_PER_SEGMENT * (double)s.segment_count, "Embree's build", why_not,
+                         sizeof why_not)) {
+            printf("%-12s Embree skipped: %s\n", o->scenes[c], why_not);
+            builds = EMBREE;    /* hairobb's rows alone, without ratios */
+        }
+        progress_start("builds: %s, %zu segments, %d rounds", o->scenes[c], s.segment_count, o->rounds);
+        for (int r = 0; r < o->rounds && ok; r++) {
+            for (int k = 0; k < builds && ok; k++) {
+                if (k == EMBREE) {
+                    emb_scene *e = emb_build_curves(s.vertices, s.vertex_count, s.indices, s.segment_count,
+                                                    catmull_rom ? EMB_FLAT_CATMULL_ROM : EMB_FLAT_BEZIER, NULL, 4, 0,
+                                                    &memory[k], &seconds[k][r]);
+                    ok = e != NULL;
+                    emb_free(e);
+                } else {
+                    hairobb_build_options build_options;
+                    memset(&build_options, 0, sizeof build_options);
+                    build_options.threads = k == ONE_THREAD ? 1 : 0;
+                    build_options.basis = catmull_rom ? HAIROBB_BASIS_CATMULL_ROM : HAIROBB_BASIS_BEZIER;
+                    build_options.bezier_copy = HAIROBB_OFF;
+                    hairobb_bvh *bvh = build_metered(&s, s.vertices, &build_options, names[k], &seconds[k][r], &transient);
+                    ok = bvh != NULL;
+                    if (bvh)
+                        memory[k] = hairobb_memory_bytes(bvh);
+                    hairobb_free(bvh);
+                }
+            }
+            for (int k = 0; k < builds && ok; k++)
+                ratios[k][r] = builds == BUILDS ? seconds[k][r] / seconds[EMBREE][r] : NAN;
+        }
+        progress(ok ? "done" : "failed");
+        if (!ok) {
+            printf("%-12s a build failed\n", o->scenes[c]);
+            ++failures;
+        }
+        for (int k = 0; k < builds && ok; k++) {
+            spread t = spread_of(seconds[k], o->rounds), q = spread_of(ratios[k], o->rounds);
+            char cell[2][48], transient_cell[32] = "-";
+            snprintf(cell[0], sizeof cell[0], "%.4f [%.4f-%.4f]", t.median, t.min, t.max);
+            if (builds == BUILDS)
+                snprintf(cell[1], sizeof cell[1], "%.2f [%.2f-%.2f]", q.median, q.min, q.max);
+            else
+                snprintf(cell[1], sizeof cell[1], "-");
+            if (k != EMBREE)
+                snprintf(transient_cell, sizeof transient_cell, "%.1f", (double)transient / (double)s.segment_count);
+            printf("%-12s %12zu %-26s %-24s %-24s %-18.1f %s\n", o->scenes[c], s.segment_count, names[k], cell[0], cell[1],
+                   (double)memory[k] / (double)s.segment_count, transient_cell);
+        }
+        scene_free(&s);
+    }
+    return failures ? 1 : 0;
+}
+
 int main(int argc, char **argv)
 {
     options o;
@@ -2732,6 +2832,8 @@ int main(int argc, char **argv)
         return save_load_bench(&o) ? 1 : 0;
     if (o.motion)
         return run_motion(&o);
+    if (o.builds)
+        return run_builds(&o);
     static scene_result results[MAX_SCENES];
     if (o.profile) {
         int failures = 0;
