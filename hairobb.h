@@ -1683,6 +1683,7 @@ typedef struct hairobb__builder {
     float next_report;                /* the fraction that makes the next progress call */
     hairobb_stats stats;
     hairobb_result error;             /* first failure; the build unwinds */
+    const uint32_t *segment_of;       /* in a task with its own copy of the points: each local id's segment */
     size_t task_limit;                /* ranges this small become tasks (0: none, or inside one) */
     struct hairobb__task *tasks;
     size_t task_count, task_capacity;
@@ -2631,7 +2632,9 @@ static void hairobb__finish_positions(hairobb__builder *b, size_t count)
    tree order once the build is done. */
 static uint64_t hairobb__make_leaf(hairobb__builder *b, const hairobb__range *r, unsigned depth)
 {
-    size_t start = r->begin;
+    size_t start = r->begin, i;
+    if (b->segment_of)      /* the task's local ids back to segments: nothing reads these positions again */
+        for (i = r->begin; i < r->end; ++i) b->ids[i] = b->segment_of[b->ids[i]];
     b->stats.leaves++;
     b->stats.leaf_references += r->end - r->begin;
     if (depth > b->stats.max_depth) b->stats.max_depth = depth;
@@ -3162,10 +3165,42 @@ static size_t hairobb__frame_capacity(const hairobb__builder *b, size_t position
     return positions;
 }
 
-/* A task's memory while it runs: its frame boxes; what stays until the
+/* A task's memory while it runs: its frame boxes and its copy of the points; what stays until the
    gather: its nodes, in a block of their size. */
+/* A task's segments in Bezier form, in memory of its own in the order of
+   its positions: a large build's tasks then read points from a block that
+   stays in cache (from the caller's arrays, a cache miss a box at 10M
+   segments), and other bases are converted once. The positions hold
+   local ids until their leaf is made (hairobb__make_leaf maps them back).
+   One block: 16 floats, an index and a segment id a reference. */
+static void hairobb__copy_task_points(hairobb__builder *local, const hairobb__range *r, void **copy)
+{
+    size_t count = r->end - r->begin, k;
+    float *points, scratch[16];
+    uint32_t *indices, *segments;
+    if (count > 0xffffffffu / 4) return;        /* indices of 4 k must fit: read the caller's arrays */
+    *copy = HAIROBB_MALLOC(count * (16 * sizeof(float) + 2 * sizeof(uint32_t)), local->user);
+    if (!*copy) { local->error = HAIROBB_ERROR_OUT_OF_MEMORY; return; }
+    points = HAIROBB__CAST(float *, *copy);
+    indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, points + 16 * count));
+    segments = indices + count;
+    for (k = 0; k < count; ++k) {
+        uint32_t id = local->ids[r->begin + k];
+        memcpy(points + 16 * k, hairobb__builder_points(local, local->vertices, id, scratch), sizeof scratch);
+        indices[k] = (uint32_t)(4 * k);
+        segments[k] = id;
+        local->ids[r->begin + k] = (uint32_t)k;
+    }
+    local->vertices = points;
+    local->indices = indices;
+    local->basis = HAIROBB_BASIS_BEZIER;
+    local->tangents = NULL;
+    local->segment_of = segments;
+}
+
 static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task)
 {
+    void *copy = NULL;
     hairobb__builder local = *b;
     local.node_allocation = local.nodes = NULL;
     local.node_bytes = local.node_capacity = 0;
@@ -3181,7 +3216,9 @@ static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task)
         local.frame_boxes = HAIROBB__CAST(float *, HAIROBB_MALLOC(6 * sizeof(float) * local.frame_capacity, local.user));
         if (!local.frame_boxes) local.error = HAIROBB_ERROR_OUT_OF_MEMORY;
     }
+    if (local.error == HAIROBB_OK && !local.time_steps) hairobb__copy_task_points(&local, &task->range, &copy);
     if (local.error == HAIROBB_OK) task->root = hairobb__build_range(&local, &task->range, task->depth, task->tries, NULL);
+    if (copy) HAIROBB_FREE(copy, local.user);
     if (local.frame_boxes) HAIROBB_FREE(local.frame_boxes, local.user);
     if (local.error == HAIROBB_OK && local.node_bytes < local.node_capacity) {
         unsigned char *exact = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(local.node_bytes, local.user));
