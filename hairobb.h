@@ -144,16 +144,20 @@
      threads                 0 (default): one build thread per core; 1: the
                              calling thread only; at most 256. Every thread
                              count builds the same tree (the top levels on
-                             the calling thread, then independent subtrees).
+                             the calling thread, independent subtrees on
+                             the other threads as the top makes them, then
+                             on all of them).
      parallel_for, _user     a renderer's task system instead of the
                              library's threads (`threads` is then unused;
                              works with HAIROBB_NO_THREADS too): the
                              independent subtrees (tens to hundreds) go to
                              parallel_for(user, count, run, context) as
-                             one call of run(context, i) each. The same
-                             tree again. While they run (after the top),
-                             progress is not reported and a cancel waits
-                             for their end.
+                             one call of run(context, i) each, once the
+                             top is built (it takes a count, so the
+                             subtrees cannot start while the top runs, as
+                             they do on the library's threads). The same
+                             tree again. While they run, progress is not
+                             reported and a cancel waits for their end.
                              A parallel_for that skips an index gives
                              HAIROBB_ERROR_INVALID_ARGUMENT.
      basis, tangents         HAIROBB_BASIS_BEZIER (default) reads 4 control

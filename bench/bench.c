@@ -2767,6 +2767,9 @@ static int run_builds(const options *o)
         progress_start("builds: %s, %zu segments, %d rounds", o->scenes[c], s.segment_count, o->rounds);
         for (int r = 0; r < o->rounds && ok; r++) {
             for (int k = 0; k < builds && ok; k++) {
+                /* a pause first: threads the last build left spinning (TBB's, Embree's) stop before the next starts */
+                struct timespec pause = {0, 200000000};
+                nanosleep(&pause, NULL);
                 if (k == EMBREE) {
                     emb_scene *e = emb_build_curves(s.vertices, s.vertex_count, s.indices, s.segment_count,
                                                     catmull_rom ? EMB_FLAT_CATMULL_ROM : EMB_FLAT_BEZIER, NULL, 4, 0,
