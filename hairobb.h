@@ -3199,8 +3199,10 @@ static void hairobb__copy_task_points(hairobb__builder *local, const hairobb__ra
     size_t count = r->end - r->begin, k;
     float *points, scratch[16];
     uint32_t *indices, *segments;
-    if (count > 0xffffffffu / 4) return;        /* indices of 4 k must fit: read the caller's arrays */
-    *copy = HAIROBB_MALLOC(count * (16 * sizeof(float) + 2 * sizeof(uint32_t)), local->user);
+    const size_t bytes_each = 16 * sizeof(float) + 2 * sizeof(uint32_t);
+    /* indices of 4 k and the block's size must fit: else read the caller's arrays */
+    if (count > 0xffffffffu / 4 || count > (size_t)-1 / bytes_each) return;
+    *copy = HAIROBB_MALLOC(count * bytes_each, local->user);
     if (!*copy) { local->error = HAIROBB_ERROR_OUT_OF_MEMORY; return; }
     points = HAIROBB__CAST(float *, *copy);
     indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, points + 16 * count));
@@ -3434,14 +3436,14 @@ static void hairobb__run_tasks_on_threads(hairobb__pool *pool, unsigned threads)
 
 /* The build's threads, before its top: they take its tasks as it adds them
    (not with a user's parallel_for, which takes a count of tasks). */
-static void hairobb__start_build_pool(hairobb__builder *b, hairobb__pool *pool, unsigned threads,
+static void hairobb__start_build_pool(hairobb__builder *b, hairobb__pool *pool, size_t segment_count, unsigned threads,
                                       hairobb_parallel_for_fn parallel_for)
 {
     memset(pool, 0, sizeof *pool);
     pool->run = hairobb__run_task_at;
     pool->context = pool;
     pool->b = b;
-    if (parallel_for || !b->task_limit || b->capacity <= b->task_limit) return;   /* no top: one task */
+    if (parallel_for || segment_count <= b->task_limit) return;   /* no top: the root is the one task */
     pool->shared = *b;
     pool->adding = 1;
     hairobb__pool_start(pool, threads, (size_t)-1);
@@ -3716,7 +3718,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     memset(&tries, 0, sizeof tries);
     tries.enabled = HAIROBB__TRY_HAIR_SPACE | (opt.spatial_splits == HAIROBB_ON ? HAIROBB__TRY_SPATIAL : 0u) |
                     (opt.clustering == HAIROBB_ON ? HAIROBB__TRY_CLUSTER : 0u);
-    hairobb__start_build_pool(&b, &pool, opt.threads, opt.parallel_for);
+    hairobb__start_build_pool(&b, &pool, segment_count, opt.threads, opt.parallel_for);
     bvh->root = hairobb__build_range(&b, &root, 0, tries, NULL);
     if (b.frame_boxes) HAIROBB_FREE(b.frame_boxes, b.user);
     b.frame_boxes = NULL;
