@@ -146,7 +146,9 @@
                              count builds the same tree (the top levels on
                              the calling thread, independent subtrees on
                              the other threads as the top makes them, then
-                             on all of them).
+                             on all of them; the first pass over every
+                             segment, and the last one that gathers the
+                             subtrees, on all of them in parts).
      parallel_for, _user     a renderer's task system instead of the
                              library's threads (`threads` is then unused;
                              works with HAIROBB_NO_THREADS too): the
@@ -155,9 +157,11 @@
                              one call of run(context, i) each, once the
                              top is built (it takes a count, so the
                              subtrees cannot start while the top runs, as
-                             they do on the library's threads). The same
-                             tree again. While they run, progress is not
-                             reported and a cancel waits for their end.
+                             they do on the library's threads). The first
+                             and last passes (see threads) call it too,
+                             before the top and after the subtrees. The
+                             same tree again. While they run, progress is
+                             not reported and a cancel waits for their end.
                              A parallel_for that skips an index gives
                              HAIROBB_ERROR_INVALID_ARGUMENT.
      basis, tangents         HAIROBB_BASIS_BEZIER (default) reads 4 control
@@ -1676,6 +1680,7 @@ typedef struct hairobb__builder {
     size_t capacity;                  /* positions */
     unsigned char *node_allocation, *nodes;
     size_t node_bytes, node_capacity;
+    size_t node_reserve;              /* the first block's bytes (a task's guess from its size) */
     void *user;
     hairobb_node_policy policy;
     hairobb_obb_layout obb_layout;
@@ -1707,6 +1712,9 @@ typedef struct hairobb__task {
     hairobb_stats stats;
     hairobb_result error;
     int ran;                          /* a user's parallel_for must run each task */
+    unsigned char *slot;              /* where the tree names it (the last pass's) */
+    size_t leaf_first;                /* its leaves' first id in the BVH's leaf ids */
+    int finished;                     /* the last pass's part ran */
 } hairobb__task;
 
 /* Control points (x, y, z, r each) of the part [u0, u1] of a segment cp
@@ -2601,10 +2609,10 @@ static size_t hairobb__alloc_node(hairobb__builder *b, size_t bytes)
     size_t offset = b->node_bytes;
     if (b->error != HAIROBB_OK) return 0;
     if (offset + bytes > b->node_capacity) {
-        size_t capacity = b->node_capacity ? 2 * b->node_capacity : 4096;
+        size_t capacity = b->node_capacity ? 2 * b->node_capacity : b->node_reserve > 4096 ? b->node_reserve : 4096;
         unsigned char *allocation, *aligned;
         while (capacity < offset + bytes) capacity *= 2;
-        allocation = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(capacity + 64, b->user));
+        allocation = HAIROBB__CAST(unsigned char *, hairobb__malloc_large(capacity + 64, b->user));
         if (!allocation) { b->error = HAIROBB_ERROR_OUT_OF_MEMORY; return 0; }
         aligned = hairobb__align64(allocation);
         if (b->node_bytes) memcpy(aligned, b->nodes, b->node_bytes);
@@ -3186,27 +3194,17 @@ static size_t hairobb__frame_capacity(const hairobb__builder *b, size_t position
     return positions;
 }
 
-/* A task's memory while it runs: its frame boxes and its copy of the points; what stays until the
-   gather: its nodes, in a block of their size. */
 /* A task's segments in Bezier form, in memory of its own in the order of
    its positions: a large build's tasks then read points from a block that
    stays in cache (from the caller's arrays, a cache miss a box at 10M
    segments), and other bases are converted once. The positions hold
    local ids until their leaf is made (hairobb__make_leaf maps them back).
-   One block: 16 floats, an index and a segment id a reference. */
-static void hairobb__copy_task_points(hairobb__builder *local, const hairobb__range *r, void **copy)
+   block: 16 floats, an index and a segment id a reference. */
+static void hairobb__copy_task_points(hairobb__builder *local, const hairobb__range *r, void *block)
 {
     size_t count = r->end - r->begin, k;
-    float *points, scratch[16];
-    uint32_t *indices, *segments;
-    const size_t bytes_each = 16 * sizeof(float) + 2 * sizeof(uint32_t);
-    /* indices of 4 k and the block's size must fit: else read the caller's arrays */
-    if (count > 0xffffffffu / 4 || count > (size_t)-1 / bytes_each) return;
-    *copy = HAIROBB_MALLOC(count * bytes_each, local->user);
-    if (!*copy) { local->error = HAIROBB_ERROR_OUT_OF_MEMORY; return; }
-    points = HAIROBB__CAST(float *, *copy);
-    indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, points + 16 * count));
-    segments = indices + count;
+    float *points = HAIROBB__CAST(float *, block), scratch[16];
+    uint32_t *indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, points + 16 * count)), *segments = indices + count;
     for (k = 0; k < count; ++k) {
         uint32_t id = local->ids[r->begin + k];
         hairobb__prefetch_points(local, r->begin + k, r->end);
@@ -3222,12 +3220,29 @@ static void hairobb__copy_task_points(hairobb__builder *local, const hairobb__ra
     local->segment_of = segments;
 }
 
-static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task)
+/* A pool thread's memory for its tasks' frame boxes and points, kept from
+   one task to the next: each task's own would be fresh pages, and a page
+   fault costs microseconds (12 on this project's VMs) where a large
+   build's task fills megabytes. */
+typedef struct hairobb__task_memory {
+    void *block;
+    size_t bytes;
+} hairobb__task_memory;
+
+/* Nodes a reference takes, about (combed fur, compressed nodes: 29 to 35
+   bytes): a task's first node block, so that it seldom grows by a copy. */
+#define HAIROBB__NODE_BYTES_GUESS 32
+
+/* memory: the thread's (NULL: the task's own, freed at its end). */
+static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task, hairobb__task_memory *memory)
 {
-    void *copy = NULL;
+    hairobb__task_memory own = {NULL, 0};
     hairobb__builder local = *b;
+    size_t count = task->range.end - task->range.begin, frame_bytes, copy_bytes, bytes;
+    const size_t copy_each = 16 * sizeof(float) + 2 * sizeof(uint32_t);
     local.node_allocation = local.nodes = NULL;
     local.node_bytes = local.node_capacity = 0;
+    local.node_reserve = count < (size_t)-1 / 2 / HAIROBB__NODE_BYTES_GUESS ? count * HAIROBB__NODE_BYTES_GUESS : 0;
     memset(&local.stats, 0, sizeof local.stats);
     local.error = HAIROBB_OK;
     local.task_limit = 0;           /* no tasks within a task; no progress calls */
@@ -3236,15 +3251,28 @@ static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task)
     local.task_count = local.task_capacity = 0;
     local.frame_capacity = hairobb__frame_capacity(&local, task->range.cap - task->range.begin);
     local.frame_boxes = NULL;
-    if (local.frame_capacity) {
-        local.frame_boxes = HAIROBB__CAST(float *, HAIROBB_MALLOC(6 * sizeof(float) * local.frame_capacity, local.user));
-        if (!local.frame_boxes) local.error = HAIROBB_ERROR_OUT_OF_MEMORY;
+    if (!memory) memory = &own;
+    /* the points' copy (at the block's alignment; moving hair reads the
+       steps' arrays, and indices of 4 k must fit), then the frame boxes */
+    frame_bytes = 6 * sizeof(float) * local.frame_capacity;
+    copy_bytes = local.time_steps || count > 0xffffffffu / 4 || count > ((size_t)-1 - frame_bytes) / copy_each ? 0
+                                                                                                           : count * copy_each;
+    bytes = copy_bytes + frame_bytes;
+    if (bytes > memory->bytes) {
+        if (memory->block) HAIROBB_FREE(memory->block, local.user);
+        memory->block = hairobb__malloc_large(bytes, local.user);
+        memory->bytes = memory->block ? bytes : 0;
+        if (!memory->block) local.error = HAIROBB_ERROR_OUT_OF_MEMORY;
     }
-    if (local.error == HAIROBB_OK && !local.time_steps) hairobb__copy_task_points(&local, &task->range, &copy);
-    if (local.error == HAIROBB_OK) task->root = hairobb__build_range(&local, &task->range, task->depth, task->tries, NULL);
-    if (copy) HAIROBB_FREE(copy, local.user);
-    if (local.frame_boxes) HAIROBB_FREE(local.frame_boxes, local.user);
-    if (local.error == HAIROBB_OK && local.node_bytes < local.node_capacity) {
+    if (local.error == HAIROBB_OK) {
+        if (copy_bytes) hairobb__copy_task_points(&local, &task->range, memory->block);
+        if (local.frame_capacity)
+            local.frame_boxes = HAIROBB__CAST(float *, HAIROBB__CAST(void *, HAIROBB__CAST(unsigned char *, memory->block) + copy_bytes));
+        task->root = hairobb__build_range(&local, &task->range, task->depth, task->tries, NULL);
+    }
+    if (own.block) HAIROBB_FREE(own.block, local.user);
+    /* a block much larger than its nodes: copied into one of their size */
+    if (local.error == HAIROBB_OK && local.node_bytes < local.node_capacity - local.node_capacity / 8) {
         unsigned char *exact = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(local.node_bytes, local.user));
         if (!exact) {
             local.error = HAIROBB_ERROR_OUT_OF_MEMORY;
@@ -3304,9 +3332,12 @@ static void hairobb__pool_publish(hairobb__pool *pool, size_t task_count)
 #endif
 }
 
+static void hairobb__run_listed_task(hairobb__pool *p, unsigned index, hairobb__task_memory *memory);
+
 static void hairobb__work(hairobb__pool *pool, int calling_thread)
 {
     hairobb__builder *b = pool->b;
+    hairobb__task_memory memory = {NULL, 0};
     for (;;) {
         size_t k, done;
         int run;
@@ -3319,9 +3350,12 @@ static void hairobb__work(hairobb__pool *pool, int calling_thread)
         run = !pool->stop && k < pool->task_count;
         if (run) pool->next_task++;
         hairobb__pool_lock(pool, 0);
-        if (!run) return;
-        pool->run(pool->context, (unsigned)k);
-        if (!b) continue;
+        if (!run) break;
+        if (!b) {
+            pool->run(pool->context, (unsigned)k);
+            continue;
+        }
+        hairobb__run_listed_task(pool, (unsigned)k, &memory);
         hairobb__pool_lock(pool, 1);
         pool->positions_done += b->tasks[k].range.cap - b->tasks[k].range.begin;
         done = pool->positions_done;
@@ -3336,6 +3370,7 @@ static void hairobb__work(hairobb__pool *pool, int calling_thread)
             }
         }
     }
+    if (memory.block) HAIROBB_FREE(memory.block, b->user);
 }
 
 #if HAIROBB__THREADS
@@ -3396,9 +3431,8 @@ static void hairobb__pool_finish(hairobb__pool *pool)
 
 /* One task, from the pool or a user's parallel_for: run on a copy, as the
    top may move the task list meanwhile. */
-static void hairobb__run_task_at(void *pool, unsigned index)
+static void hairobb__run_listed_task(hairobb__pool *p, unsigned index, hairobb__task_memory *memory)
 {
-    hairobb__pool *p = HAIROBB__CAST(hairobb__pool *, pool);
     hairobb__task task;
     int listed;
     hairobb__pool_lock(p, 1);
@@ -3407,10 +3441,16 @@ static void hairobb__run_task_at(void *pool, unsigned index)
     else memset(&task, 0, sizeof task);
     hairobb__pool_lock(p, 0);
     if (!listed) return;
-    hairobb__run_task(&p->shared, &task);
+    hairobb__run_task(&p->shared, &task, memory);
     hairobb__pool_lock(p, 1);
     p->b->tasks[index] = task;
     hairobb__pool_lock(p, 0);
+}
+
+/* A user's parallel_for: each task with memory of its own. */
+static void hairobb__run_task_at(void *pool, unsigned index)
+{
+    hairobb__run_listed_task(HAIROBB__CAST(hairobb__pool *, pool), index, NULL);
 }
 
 /* The tasks through a user's parallel_for, then their progress at once. */
@@ -3432,6 +3472,108 @@ static void hairobb__run_tasks_on_threads(hairobb__pool *pool, unsigned threads)
 {
     hairobb__pool_start(pool, threads, pool->task_count);
     hairobb__pool_finish(pool);
+}
+
+/* Passes over every segment outside the tree's recursion (the world boxes
+   first, the gather last) run in parts: at most HAIROBB__PARTS of at least
+   HAIROBB__PART_MIN items, each part's results merged in part order, so
+   any thread count gives the same bits. */
+#define HAIROBB__PARTS 256
+#define HAIROBB__PART_MIN 32768
+
+static size_t hairobb__part_count(size_t items)
+{
+    size_t parts = items / HAIROBB__PART_MIN + 1;
+    return parts > HAIROBB__PARTS ? HAIROBB__PARTS : parts;
+}
+
+/* Items [*begin, *end) of part k of `parts`. */
+static void hairobb__part_items(size_t items, size_t parts, size_t k, size_t *begin, size_t *end)
+{
+    size_t each = items / parts + (items % parts != 0);
+    *begin = k * each < items ? k * each : items;
+    *end = *begin + each < items ? *begin + each : items;
+}
+
+/* run(context, k) for each part k < parts: on the user's parallel_for, or
+   on up to `threads` threads with the calling one. */
+static void hairobb__run_parts(unsigned threads, hairobb_parallel_for_fn parallel_for, void *parallel_for_user,
+                               size_t parts, hairobb_task_fn run, void *context)
+{
+    hairobb__pool pool;
+    size_t k;
+    if (parts < 2) {
+        for (k = 0; k < parts; ++k) run(context, (unsigned)k);
+        return;
+    }
+    if (parallel_for) {
+        parallel_for(parallel_for_user, (unsigned)parts, run, context);
+        return;
+    }
+    memset(&pool, 0, sizeof pool);
+    pool.run = run;
+    pool.context = context;
+    pool.task_count = parts;
+    hairobb__run_tasks_on_threads(&pool, threads);
+}
+
+/* The build's first pass: every position holds its segment whole, with its
+   world box; each part's bounds of the boxes (of every step's, for moving
+   hair whose SAH boxes are at mid-time), merged into the BVH's. */
+typedef struct hairobb__world_pass {
+    hairobb__builder *b;
+    size_t segment_count, parts;
+    float bounds[HAIROBB__PARTS][6];
+    int ran[HAIROBB__PARTS];          /* a user's parallel_for must run each part */
+} hairobb__world_pass;
+
+static void hairobb__world_part(void *context, unsigned k)
+{
+    hairobb__world_pass *pass = HAIROBB__CAST(hairobb__world_pass *, context);
+    hairobb__builder *b = pass->b;
+    float identity[9], *lower = pass->bounds[k], *upper = lower + 3;
+    hairobb__frame_prep world;
+    size_t i, begin, end;
+    hairobb__identity_frame(identity);
+    hairobb__prepare_frame(identity, &world);
+    hairobb__part_items(pass->segment_count, pass->parts, k, &begin, &end);
+    hairobb__box_empty(lower, upper);
+    for (i = begin; i < end; ++i) {
+        float *box = b->world_boxes + 6 * i;
+        b->ids[i] = (uint32_t)i;
+        if (b->ranges) { b->ranges[2 * i] = 0.0f; b->ranges[2 * i + 1] = 1.0f; }
+        hairobb__ref_box(b, i, &world, NULL, NULL, box, box + 3);
+        if (b->sah_mid_time) {   /* the boxes are at mid-time; the bounds hold every step */
+            hairobb__b4 lo, hi;
+            float step_lower[3], step_upper[3];
+            hairobb__ref_box_union(b, i, &world, NULL, NULL, &lo, &hi);
+            hairobb__b4_store3(step_lower, lo);
+            hairobb__b4_store3(step_upper, hi);
+            hairobb__box_grow(lower, upper, step_lower, step_upper);
+        } else {
+            hairobb__box_grow(lower, upper, box, box + 3);
+        }
+    }
+    pass->ran[k] = 1;
+}
+
+/* Returns 0 if a user's parallel_for left a part unrun. */
+static int hairobb__world_boxes(hairobb__builder *b, size_t segment_count, unsigned threads,
+                                hairobb_parallel_for_fn parallel_for, void *parallel_for_user, float lower[3], float upper[3])
+{
+    hairobb__world_pass pass;
+    size_t k;
+    pass.b = b;
+    pass.segment_count = segment_count;
+    pass.parts = hairobb__part_count(segment_count);
+    memset(pass.ran, 0, sizeof pass.ran);
+    hairobb__run_parts(threads, parallel_for, parallel_for_user, pass.parts, hairobb__world_part, &pass);
+    hairobb__box_empty(lower, upper);
+    for (k = 0; k < pass.parts; ++k) {
+        if (!pass.ran[k]) return 0;
+        hairobb__box_grow(lower, upper, pass.bounds[k], pass.bounds[k] + 3);
+    }
+    return 1;
 }
 
 /* The build's threads, before its top: they take its tasks as it adds them
@@ -3479,13 +3621,33 @@ static void hairobb__run_tasks(hairobb__builder *b, hairobb__pool *pool, unsigne
     if (b->error == HAIROBB_OK && pool->stop) b->error = HAIROBB_ERROR_CANCELLED;
 }
 
-/* The BVH's node memory, of the nodes' size: the top's nodes, then each
-   task's, in task order; each task's block is freed once copied. */
-static void hairobb__gather_tasks(hairobb__builder *b, hairobb_bvh *bvh)
+typedef struct hairobb__gather {
+    hairobb__builder *b;
+    unsigned char *nodes;
+} hairobb__gather;
+
+/* Task k's nodes copied to where they go, its block freed. */
+static void hairobb__gather_task(void *context, unsigned k)
 {
+    const hairobb__gather *g = HAIROBB__CAST(const hairobb__gather *, context);
+    hairobb__task *task = &g->b->tasks[k];
+    if (task->node_bytes) memcpy(g->nodes + task->node_delta, task->nodes, task->node_bytes);
+    if (task->node_allocation) HAIROBB_FREE(task->node_allocation, g->b->user);
+    task->node_allocation = task->nodes = NULL;
+    task->finished = 1;
+}
+
+/* The BVH's node memory, of the nodes' size: the top's nodes, then each
+   task's, in task order, copied in parallel; the tasks' statistics
+   summed. A user's parallel_for that skips a task: INVALID_ARGUMENT. */
+static void hairobb__gather_tasks(hairobb__builder *b, hairobb_bvh *bvh, unsigned threads,
+                                  hairobb_parallel_for_fn parallel_for, void *parallel_for_user)
+{
+    hairobb__gather g;
     size_t k, bytes = b->node_bytes;
     for (k = 0; k < b->task_count; ++k) {
         b->tasks[k].node_delta = bytes;
+        b->tasks[k].finished = 0;
         bytes += b->tasks[k].node_bytes;
     }
     if (bytes) {
@@ -3499,12 +3661,13 @@ static void hairobb__gather_tasks(hairobb__builder *b, hairobb_bvh *bvh)
     if (b->node_allocation) HAIROBB_FREE(b->node_allocation, b->user);
     b->node_allocation = b->nodes = NULL;
     b->node_bytes = b->node_capacity = 0;
+    g.b = b;
+    g.nodes = bvh->nodes;
+    hairobb__run_parts(threads, parallel_for, parallel_for_user, b->task_count, hairobb__gather_task, &g);
     for (k = 0; k < b->task_count; ++k) {
-        hairobb__task *task = &b->tasks[k];
+        const hairobb__task *task = &b->tasks[k];
         unsigned depth = task->stats.max_depth;
-        if (task->node_bytes) memcpy(bvh->nodes + task->node_delta, task->nodes, task->node_bytes);
-        if (task->node_allocation) HAIROBB_FREE(task->node_allocation, b->user);
-        task->node_allocation = task->nodes = NULL;
+        if (!task->finished) b->error = HAIROBB_ERROR_INVALID_ARGUMENT;
         b->stats.aabb_nodes += task->stats.aabb_nodes;
         b->stats.obb_nodes += task->stats.obb_nodes;
         b->stats.leaves += task->stats.leaves;
@@ -3525,36 +3688,93 @@ static void hairobb__free_tasks(hairobb__builder *b)
 
 /* The last pass, in tree order: task references become their subtrees, node
    offsets move by where the subtree's nodes went, and leaves get their
-   segment ids copied out of the positions they named. */
-static void hairobb__finish_tree(const hairobb__builder *b, unsigned char *nodes, uint64_t *ref, size_t node_delta,
-                                 uint32_t *leaf_prims, float *leaf_ranges, size_t *leaf_count)
+   segment ids copied out of the positions they named. With tasks_later a
+   task's reference stays, and the task notes where it is (slot) and where
+   its leaves' ids start: hairobb__finish_task does the rest, in parallel,
+   with the same result. */
+typedef struct hairobb__finish {
+    const hairobb__builder *b;
+    unsigned char *nodes;
+    uint32_t *leaf_prims;
+    float *leaf_ranges;
+    int tasks_later;
+} hairobb__finish;
+
+/* slot: where the reference is (in nodes, or the root's copy) */
+static void hairobb__finish_tree(const hairobb__finish *f, unsigned char *slot, size_t node_delta, size_t *leaf_count)
 {
-    unsigned type = HAIROBB__REF_TYPE(*ref);
+    uint64_t ref;
+    unsigned type;
     size_t child_offset;
     int i;
+    memcpy(&ref, slot, sizeof ref);
+    type = HAIROBB__REF_TYPE(ref);
     if (type == HAIROBB__REF_TASK) {
-        const hairobb__task *task = &b->tasks[*ref >> 4];
-        *ref = task->root;
+        hairobb__task *task = &f->b->tasks[ref >> 4];
+        if (f->tasks_later) {
+            task->slot = slot;
+            task->leaf_first = *leaf_count;
+            *leaf_count += task->stats.leaf_references;
+            return;
+        }
+        ref = task->root;
         node_delta = task->node_delta;
-        type = HAIROBB__REF_TYPE(*ref);
+        type = HAIROBB__REF_TYPE(ref);
     }
     if (type == HAIROBB__REF_EMPTY) return;
     if (type == HAIROBB__REF_LEAF) {
-        size_t start = (size_t)(*ref >> 8), count = (size_t)((*ref >> 4) & 15u);
-        memcpy(leaf_prims + *leaf_count, b->ids + start, count * sizeof(uint32_t));
-        if (leaf_ranges) memcpy(leaf_ranges + 2 * *leaf_count, b->ranges + 2 * start, 2 * count * sizeof(float));
-        *ref = ((uint64_t)*leaf_count << 8) | ((uint64_t)count << 4) | HAIROBB__REF_LEAF;
+        size_t start = (size_t)(ref >> 8), count = (size_t)((ref >> 4) & 15u);
+        memcpy(f->leaf_prims + *leaf_count, f->b->ids + start, count * sizeof(uint32_t));
+        if (f->leaf_ranges) memcpy(f->leaf_ranges + 2 * *leaf_count, f->b->ranges + 2 * start, 2 * count * sizeof(float));
+        ref = ((uint64_t)*leaf_count << 8) | ((uint64_t)count << 4) | HAIROBB__REF_LEAF;
+        memcpy(slot, &ref, sizeof ref);
         *leaf_count += count;
         return;
     }
-    *ref += node_delta;
-    child_offset = (size_t)(*ref & ~(uint64_t)15) + hairobb__node_size(type) - HAIROBB__W * sizeof(uint64_t);
-    for (i = 0; i < HAIROBB__W; ++i) {
-        uint64_t child;
-        memcpy(&child, nodes + child_offset + i * sizeof child, sizeof child);
-        hairobb__finish_tree(b, nodes, &child, node_delta, leaf_prims, leaf_ranges, leaf_count);
-        memcpy(nodes + child_offset + i * sizeof child, &child, sizeof child);
+    ref += node_delta;
+    memcpy(slot, &ref, sizeof ref);
+    child_offset = (size_t)(ref & ~(uint64_t)15) + hairobb__node_size(type) - HAIROBB__W * sizeof(uint64_t);
+    for (i = 0; i < HAIROBB__W; ++i) hairobb__finish_tree(f, f->nodes + child_offset + i * sizeof ref, node_delta, leaf_count);
+}
+
+/* Task k's part of the last pass: its subtree finished. */
+static void hairobb__finish_task(void *context, unsigned k)
+{
+    const hairobb__finish *f = HAIROBB__CAST(const hairobb__finish *, context);
+    hairobb__finish own = *f;
+    hairobb__task *task = &f->b->tasks[k];
+    size_t leaf_count = task->leaf_first;
+    own.tasks_later = 0;
+    if (task->slot) hairobb__finish_tree(&own, task->slot, 0, &leaf_count);
+    task->finished = leaf_count == task->leaf_first + task->stats.leaf_references;
+}
+
+/* The last pass over the whole tree: the top's part on the calling thread,
+   the tasks' in parallel. Returns 0 if a user's parallel_for left a task's
+   part unrun. */
+static int hairobb__finish_build(hairobb__builder *b, hairobb_bvh *bvh, unsigned threads,
+                                 hairobb_parallel_for_fn parallel_for, void *parallel_for_user)
+{
+    hairobb__finish f;
+    unsigned char root[sizeof(uint64_t)];
+    size_t k;
+    f.b = b;
+    f.nodes = bvh->nodes;
+    f.leaf_prims = bvh->leaf_prims;
+    f.leaf_ranges = bvh->leaf_ranges;
+    f.tasks_later = 1;
+    bvh->leaf_prim_count = 0;
+    memcpy(root, &bvh->root, sizeof root);
+    for (k = 0; k < b->task_count; ++k) {
+        b->tasks[k].slot = NULL;
+        b->tasks[k].finished = 0;
     }
+    hairobb__finish_tree(&f, root, 0, &bvh->leaf_prim_count);
+    hairobb__run_parts(threads, parallel_for, parallel_for_user, b->task_count, hairobb__finish_task, &f);
+    memcpy(&bvh->root, root, sizeof root);
+    for (k = 0; k < b->task_count; ++k)
+        if (!b->tasks[k].finished) return 0;
+    return 1;
 }
 
 static void hairobb__setup_pieces(hairobb_bvh *bvh, int pieces)
@@ -3600,7 +3820,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     hairobb_bvh *bvh;
     hairobb_result result;
     hairobb_simd simd;
-    size_t i, extra;
+    size_t extra;
     unsigned steps;
 
     if (out) *out = NULL;
@@ -3693,26 +3913,9 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     }
     b.error = HAIROBB_OK;
 
-    hairobb__box_empty(bvh->lower, bvh->upper);
-    for (i = 0; i < segment_count; ++i) {
-        b.ids[i] = (uint32_t)i;
-        hairobb__set_range(&b, i, 0.0f, 1.0f);
-        hairobb__box_grow(bvh->lower, bvh->upper, b.world_boxes + 6 * i, b.world_boxes + 6 * i + 3);
-    }
-    if (b.sah_mid_time) {   /* the bounds hold every step: the boxes above are at mid-time */
-        hairobb__frame_prep world;
-        float identity[9];
-        hairobb__identity_frame(identity);
-        hairobb__prepare_frame(identity, &world);
-        hairobb__box_empty(bvh->lower, bvh->upper);
-        for (i = 0; i < segment_count; ++i) {
-            hairobb__b4 lo, hi;
-            float lower[3], upper[3];
-            hairobb__ref_box_union(&b, i, &world, NULL, NULL, &lo, &hi);
-            hairobb__b4_store3(lower, lo);
-            hairobb__b4_store3(upper, hi);
-            hairobb__box_grow(bvh->lower, bvh->upper, lower, upper);
-        }
+    if (!hairobb__world_boxes(&b, segment_count, opt.threads, opt.parallel_for, opt.parallel_for_user, bvh->lower, bvh->upper)) {
+        b.error = HAIROBB_ERROR_INVALID_ARGUMENT;
+        goto failed;
     }
     root.begin = 0; root.end = segment_count; root.cap = b.capacity;
     memset(&tries, 0, sizeof tries);
@@ -3727,7 +3930,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
        splits, which the leaves keep for hairobb_refit */
     HAIROBB_FREE(b.world_boxes, b.user);
     b.world_boxes = NULL;
-    if (b.error == HAIROBB_OK) hairobb__gather_tasks(&b, bvh);
+    if (b.error == HAIROBB_OK) hairobb__gather_tasks(&b, bvh, opt.threads, opt.parallel_for, opt.parallel_for_user);
     if (b.error != HAIROBB_OK) goto failed;
     if (b.progress && b.progress(b.progress_user, 1.0f)) { b.error = HAIROBB_ERROR_CANCELLED; goto failed; }
 
@@ -3740,7 +3943,10 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
         bvh->leaf_ranges = HAIROBB__CAST(float *, hairobb__malloc_large(2 * sizeof(float) * b.stats.leaf_references, b.user));
         if (!bvh->leaf_ranges) goto failed;
     }
-    hairobb__finish_tree(&b, bvh->nodes, &bvh->root, 0, bvh->leaf_prims, bvh->leaf_ranges, &bvh->leaf_prim_count);
+    if (!hairobb__finish_build(&b, bvh, opt.threads, opt.parallel_for, opt.parallel_for_user)) {
+        b.error = HAIROBB_ERROR_INVALID_ARGUMENT;
+        goto failed;
+    }
     if (b.ranges) HAIROBB_FREE(b.ranges, b.user);
     b.ranges = NULL;
     if (bvh->leaf_ranges && bvh->leaf_prim_count == segment_count) {

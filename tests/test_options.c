@@ -314,13 +314,14 @@ static hairobb_result build_with_progress(const hair_scene *s, int set, progress
     return hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, &opt, bvh);
 }
 
-/* A renderer's task system that runs every task in order, counting its calls. */
+/* A renderer's task system that runs every task in order, counting its
+   calls once progress was reported (user: the progress log): the first
+   pass over every segment, before the top, runs in parts too. */
 static int parallel_for_calls;
 static void counting_parallel_for(void *user, unsigned count, hairobb_task_fn run, void *context)
 {
     unsigned i;
-    (void)user;
-    ++parallel_for_calls;
+    if (((const progress_log *)user)->calls > 0) ++parallel_for_calls;
     for (i = 0; i < count; ++i) run(context, i);
 }
 
@@ -341,6 +342,7 @@ static void test_progress_in_top(const hair_scene *s)
     opt.progress = progress_record;
     opt.progress_user = &log;
     opt.parallel_for = counting_parallel_for;
+    opt.parallel_for_user = &log;
     parallel_for_calls = 0;
     r = hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, &opt, &bvh);
     CHECK(r == HAIROBB_ERROR_CANCELLED && bvh == NULL, "%s: cancel in the top: %s", s->name, hairobb_result_string(r));

@@ -1148,7 +1148,8 @@ static void test_allocation_failure(void)
         opt.parallel_for = configs[c].parallel_for ? for_backwards : NULL;
         parallel_for_calls = 0;
         CHECK(hairobb_build(v, 4 * n, ix, n, &opt, &bvh) == HAIROBB_OK, "%s: counting build", name);
-        CHECK(parallel_for_calls == (unsigned)configs[c].parallel_for, "%s: parallel_for called %u times", name,
+        /* the tasks, and the last pass's parts (the world boxes' too above 32k segments) */
+        CHECK(configs[c].parallel_for ? parallel_for_calls >= 1 : parallel_for_calls == 0, "%s: parallel_for called %u times", name,
               parallel_for_calls);
         allocations = counter.calls;
         hairobb_get_stats(bvh, &stats);
