@@ -2118,6 +2118,142 @@ static void hairobb__sweep_objects(int bins, const hairobb__b4 (*bin_lower)[HAIR
 }
 #endif
 
+/* Passes over every segment outside the tree's recursion (the world boxes
+   first, the gather last) run in parts: at most HAIROBB__PARTS of at least
+   HAIROBB__PART_MIN items, each part's results merged in part order, so
+   any thread count gives the same bits. */
+#define HAIROBB__PARTS 256
+#define HAIROBB__PART_MIN 32768
+
+static size_t hairobb__part_count(size_t items)
+{
+    size_t parts = items / HAIROBB__PART_MIN + 1;
+    return parts > HAIROBB__PARTS ? HAIROBB__PARTS : parts;
+}
+
+/* Items [*begin, *end) of part k of `parts`. */
+static void hairobb__part_items(size_t items, size_t parts, size_t k, size_t *begin, size_t *end)
+{
+    size_t each = items / parts + (items % parts != 0);
+    *begin = k * each < items ? k * each : items;
+    *end = *begin + each < items ? *begin + each : items;
+}
+
+/* What binning keeps of a range's boxes: their bounds and their centroids'
+   (first pass), then each axis' bins (second pass). The passes over parts
+   of a range merge, in part order, into the bits of one pass over it. */
+typedef struct hairobb__box_bounds {
+    hairobb__b4 centre_min, centre_max, lower, upper;
+} hairobb__box_bounds;
+
+typedef struct hairobb__object_bins {
+    hairobb__b4 lower[3][HAIROBB__BINS], upper[3][HAIROBB__BINS];
+    uint32_t count[HAIROBB__BINS][4];   /* [bin][axis]; a range holds at most 2^32-1 references */
+} hairobb__object_bins;
+
+HAIROBB__INLINE void hairobb__bounds_empty(hairobb__box_bounds *bounds)
+{
+    bounds->centre_min = bounds->lower = hairobb__b4_set1(FLT_MAX);
+    bounds->centre_max = bounds->upper = hairobb__b4_set1(-FLT_MAX);
+}
+
+HAIROBB__INLINE void hairobb__bounds_grow(hairobb__box_bounds *bounds, hairobb__b4 lower, hairobb__b4 upper)
+{
+    hairobb__b4 c = hairobb__b4_mul(hairobb__b4_set1(0.5f), hairobb__b4_add(lower, upper));
+    bounds->centre_min = hairobb__b4_min(bounds->centre_min, c);
+    bounds->centre_max = hairobb__b4_max(bounds->centre_max, c);
+    bounds->lower = hairobb__b4_min(bounds->lower, lower);
+    bounds->upper = hairobb__b4_max(bounds->upper, upper);
+}
+
+/* The first pass over boxes already made (lower, upper: 6 floats each). */
+HAIROBB__INLINE void hairobb__bound_boxes(const float *boxes, size_t count, hairobb__box_bounds *bounds)
+{
+    size_t i;
+    hairobb__bounds_empty(bounds);
+    for (i = 0; i < count; ++i) hairobb__bounds_grow(bounds, hairobb__b4_load4(boxes + 6 * i), hairobb__b4_load_upper(boxes + 6 * i));
+}
+
+HAIROBB__INLINE void hairobb__bounds_merge(hairobb__box_bounds *bounds, const hairobb__box_bounds *part)
+{
+    bounds->centre_min = hairobb__b4_min(bounds->centre_min, part->centre_min);
+    bounds->centre_max = hairobb__b4_max(bounds->centre_max, part->centre_max);
+    bounds->lower = hairobb__b4_min(bounds->lower, part->lower);
+    bounds->upper = hairobb__b4_max(bounds->upper, part->upper);
+}
+
+/* The second pass: each box into the bin of its centroid on each axis. */
+HAIROBB__INLINE void hairobb__bin_boxes(const float *boxes, size_t count, int bins, hairobb__b4 origin, hairobb__b4 scale,
+                                        hairobb__object_bins *o)
+{
+    hairobb__b4 half = hairobb__b4_set1(0.5f);
+    size_t i;
+    int axis, bin;
+    memset(o->count, 0, (size_t)bins * sizeof o->count[0]);
+    for (axis = 0; axis < 3; ++axis)
+        for (bin = 0; bin < bins; ++bin) {
+            o->lower[axis][bin] = hairobb__b4_set1(FLT_MAX);
+            o->upper[axis][bin] = hairobb__b4_set1(-FLT_MAX);
+        }
+    for (i = 0; i < count; ++i) {
+        const float *box = boxes + 6 * i;
+        hairobb__b4 lower = hairobb__b4_load4(box), upper = hairobb__b4_load_upper(box);
+        int at[4];
+        hairobb__b4_bins(hairobb__b4_mul(hairobb__b4_sub(hairobb__b4_mul(half, hairobb__b4_add(lower, upper)), origin), scale), at);
+#define HAIROBB__BIN_INTO(axis) \
+        o->lower[axis][at[axis]] = hairobb__b4_min(o->lower[axis][at[axis]], lower); \
+        o->upper[axis][at[axis]] = hairobb__b4_max(o->upper[axis][at[axis]], upper); \
+        o->count[at[axis]][axis]++;
+        HAIROBB__BIN_INTO(0)
+        HAIROBB__BIN_INTO(1)
+        HAIROBB__BIN_INTO(2)
+#undef HAIROBB__BIN_INTO
+    }
+}
+
+static void hairobb__bins_merge(hairobb__object_bins *o, const hairobb__object_bins *part, int bins)
+{
+    int axis, bin;
+    for (bin = 0; bin < bins; ++bin)
+        for (axis = 0; axis < 3; ++axis) {
+            o->lower[axis][bin] = hairobb__b4_min(o->lower[axis][bin], part->lower[axis][bin]);
+            o->upper[axis][bin] = hairobb__b4_max(o->upper[axis][bin], part->upper[axis][bin]);
+            o->count[bin][axis] += part->count[bin][axis];
+        }
+}
+
+/* The top's large ranges are binned in world space in parts, by the
+   calling thread and whichever pool threads are idle (hairobb__top_parts). */
+#define HAIROBB__TOP_PARTS 16
+#define HAIROBB__TOP_PART_MIN 65536
+
+static void hairobb__top_parts(const hairobb__builder *b, size_t parts, hairobb_task_fn run, void *context);
+
+typedef struct hairobb__world_binning {
+    const float *boxes;
+    size_t count, parts;
+    int bins;
+    hairobb__b4 origin, scale;
+    hairobb__box_bounds bounds[HAIROBB__TOP_PARTS];
+    hairobb__object_bins binned[HAIROBB__TOP_PARTS];
+} hairobb__world_binning;
+
+static void hairobb__bound_part(void *context, unsigned k)
+{
+    hairobb__world_binning *w = HAIROBB__CAST(hairobb__world_binning *, context);
+    size_t begin, end;
+    hairobb__part_items(w->count, w->parts, k, &begin, &end);
+    hairobb__bound_boxes(w->boxes + 6 * begin, end - begin, &w->bounds[k]);
+}
+
+static void hairobb__bin_part(void *context, unsigned k)
+{
+    hairobb__world_binning *w = HAIROBB__CAST(hairobb__world_binning *, context);
+    size_t begin, end;
+    hairobb__part_items(w->count, w->parts, k, &begin, &end);
+    hairobb__bin_boxes(w->boxes + 6 * begin, end - begin, w->bins, w->origin, w->scale, &w->binned[k]);
+}
+
 /* Best SAH split of the range binned along the axes of frame (NULL = world
    axes): by centroid (object split) and, with spatial_slack > 0, by
    clipping references at the bin planes (spatial split) when at most
@@ -2132,73 +2268,70 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
     float bmin[3], bmax[3];
     /* boxes + 6 * (i - r->begin): position i's */
     float *boxes = frame ? hairobb__frame_box(b, r->begin) : b->world_boxes + 6 * r->begin;
-    hairobb__b4 cmin = hairobb__b4_set1(FLT_MAX), cmax = hairobb__b4_set1(-FLT_MAX), half = hairobb__b4_set1(0.5f);
-    hairobb__b4 box_min = cmin, box_max = cmax;
+    hairobb__box_bounds bounds;
+    hairobb__world_binning *parted = NULL;
+    hairobb__object_bins o;
     hairobb__frame_prep prep;
-    size_t i;
+    size_t i, count = r->end - r->begin;
     /* fewer bins than references only wastes sweeps */
-    int axis, bins = r->end - r->begin < HAIROBB__BINS ? (int)(r->end - r->begin) : HAIROBB__BINS;
+    int axis, bins = count < HAIROBB__BINS ? (int)count : HAIROBB__BINS;
     if (frame) {
-        HAIROBB_ASSERT(b->frame_first == r->begin && r->end - r->begin <= b->frame_capacity);
+        HAIROBB_ASSERT(b->frame_first == r->begin && count <= b->frame_capacity);
         hairobb__prepare_frame(frame, &prep);
-    }
-    /* the boxes (in a frame: computed here, for the binning and for
-       hairobb__partition) and the bounds of their centroids, in one pass */
-    for (i = r->begin; i < r->end; ++i) {
-        hairobb__b4 lower, upper, c;
-        if (frame) {
+        /* the boxes (computed here, for the binning and for
+           hairobb__partition) and the bounds of their centroids, in one pass */
+        hairobb__bounds_empty(&bounds);
+        for (i = r->begin; i < r->end; ++i) {
+            hairobb__b4 lower, upper;
             hairobb__prefetch_points(b, i, r->end);
             hairobb__ref_box_v4(b, i, &prep, NULL, NULL, &lower, &upper);
             hairobb__b4_store3(boxes + 6 * (i - r->begin), lower);
             hairobb__b4_store3(boxes + 6 * (i - r->begin) + 3, upper);
-        } else {
-            lower = hairobb__b4_load4(boxes + 6 * (i - r->begin));
-            upper = hairobb__b4_load_upper(boxes + 6 * (i - r->begin));
+            hairobb__bounds_grow(&bounds, lower, upper);
         }
-        c = hairobb__b4_mul(half, hairobb__b4_add(lower, upper));
-        cmin = hairobb__b4_min(cmin, c);
-        cmax = hairobb__b4_max(cmax, c);
-        box_min = hairobb__b4_min(box_min, lower);
-        box_max = hairobb__b4_max(box_max, upper);
+    } else if (b->pool && count >= 2 * HAIROBB__TOP_PART_MIN) {
+        /* the top's world binning, in parts (the work area is large: not on the stack) */
+        parted = HAIROBB__CAST(hairobb__world_binning *, HAIROBB_MALLOC(sizeof *parted, b->user));
     }
-    hairobb__b4_store3(bmin, box_min);
-    hairobb__b4_store3(bmax, box_max);
+    if (parted) {
+        size_t k;
+        parted->boxes = boxes;
+        parted->count = count;
+        parted->parts = count / HAIROBB__TOP_PART_MIN < HAIROBB__TOP_PARTS ? count / HAIROBB__TOP_PART_MIN : HAIROBB__TOP_PARTS;
+        parted->bins = bins;
+        hairobb__top_parts(b, parted->parts, hairobb__bound_part, parted);
+        bounds = parted->bounds[0];
+        for (k = 1; k < parted->parts; ++k) hairobb__bounds_merge(&bounds, &parted->bounds[k]);
+    } else if (!frame) {
+        hairobb__bound_boxes(boxes, count, &bounds);
+    }
+    hairobb__b4_store3(bmin, bounds.lower);
+    hairobb__b4_store3(bmax, bounds.upper);
     if (!frame) *area = hairobb__half_area(bmin, bmax);
     box_cost = box_per_area * *area;
     {
         /* object binning: one pass over the references for all three axes */
-        hairobb__b4 bin_lower[3][HAIROBB__BINS], bin_upper[3][HAIROBB__BINS], scale;
-        uint32_t bin_count[HAIROBB__BINS][4];   /* [bin][axis]; a range holds at most 2^32-1 references */
         float scales[3], origins[3];
         int bin;
-        memset(bin_count, 0, (size_t)bins * sizeof bin_count[0]);
         for (axis = 0; axis < 3; ++axis) {
-            origins[axis] = hairobb__b4_lane(cmin, axis);
-            scales[axis] = hairobb__bin_scale(bins, hairobb__b4_lane(cmax, axis) - origins[axis]);
-            for (bin = 0; bin < bins; ++bin) {
-                bin_lower[axis][bin] = hairobb__b4_set1(FLT_MAX);
-                bin_upper[axis][bin] = hairobb__b4_set1(-FLT_MAX);
-            }
+            origins[axis] = hairobb__b4_lane(bounds.centre_min, axis);
+            scales[axis] = hairobb__bin_scale(bins, hairobb__b4_lane(bounds.centre_max, axis) - origins[axis]);
         }
-        scale = hairobb__b4_set3(scales);
-        for (i = r->begin; i < r->end; ++i) {
-            const float *box = boxes + 6 * (i - r->begin);
-            hairobb__b4 lower = hairobb__b4_load4(box), upper = hairobb__b4_load_upper(box);
-            int at[4];
-            hairobb__b4_bins(hairobb__b4_mul(hairobb__b4_sub(hairobb__b4_mul(half, hairobb__b4_add(lower, upper)), cmin), scale), at);
-#define HAIROBB__BIN_INTO(axis) \
-            bin_lower[axis][at[axis]] = hairobb__b4_min(bin_lower[axis][at[axis]], lower); \
-            bin_upper[axis][at[axis]] = hairobb__b4_max(bin_upper[axis][at[axis]], upper); \
-            bin_count[at[axis]][axis]++;
-            HAIROBB__BIN_INTO(0)
-            HAIROBB__BIN_INTO(1)
-            HAIROBB__BIN_INTO(2)
-#undef HAIROBB__BIN_INTO
+        if (parted) {
+            size_t k;
+            parted->origin = bounds.centre_min;
+            parted->scale = hairobb__b4_set3(scales);
+            hairobb__top_parts(b, parted->parts, hairobb__bin_part, parted);
+            o = parted->binned[0];
+            for (k = 1; k < parted->parts; ++k) hairobb__bins_merge(&o, &parted->binned[k], bins);
+            HAIROBB_FREE(parted, b->user);
+        } else {
+            hairobb__bin_boxes(boxes, count, bins, bounds.centre_min, hairobb__b4_set3(scales), &o);
         }
 #if HAIROBB__SSE
         if (r->end - r->begin <= 0x7fffffffu) {
-            hairobb__sweep_objects(bins, (const hairobb__b4 (*)[HAIROBB__BINS])bin_lower,
-                                   (const hairobb__b4 (*)[HAIROBB__BINS])bin_upper, (const uint32_t (*)[4])bin_count,
+            hairobb__sweep_objects(bins, (const hairobb__b4 (*)[HAIROBB__BINS])o.lower,
+                                   (const hairobb__b4 (*)[HAIROBB__BINS])o.upper, (const uint32_t (*)[4])o.count,
                                    box_cost, frame, origins, scales, best);
         } else
 #endif
@@ -2208,9 +2341,9 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
                 size_t counts[HAIROBB__BINS];
                 if (!(scales[axis] > 0.0f)) continue;
                 for (bin = 0; bin < bins; ++bin) {
-                    hairobb__b4_store3(lower[bin], bin_lower[axis][bin]);
-                    hairobb__b4_store3(upper[bin], bin_upper[axis][bin]);
-                    counts[bin] = bin_count[bin][axis];
+                    hairobb__b4_store3(lower[bin], o.lower[axis][bin]);
+                    hairobb__b4_store3(upper[bin], o.upper[axis][bin]);
+                    counts[bin] = o.count[bin][axis];
                 }
                 hairobb__sweep_bins(bins, (const float (*)[3])lower, (const float (*)[3])upper, counts, counts, box_cost,
                                     HAIROBB__SPLIT_OBJECT, frame, axis, origins[axis], scales[axis], best);
@@ -2325,24 +2458,67 @@ static void hairobb__range_box(const hairobb__builder *b, size_t begin, size_t e
     for (i = begin; i < end; ++i) hairobb__box_grow(lower, upper, b->world_boxes + 6 * i, b->world_boxes + 6 * i + 3);
 }
 
+/* The box of positions [begin, end) in a prepared frame, with node_box's radius scale. */
+HAIROBB__INLINE void hairobb__positions_box(const hairobb__builder *b, size_t begin, size_t end, const hairobb__frame_prep *prep,
+                                            const float *centre, const float norms[3], hairobb__b4 *lower, hairobb__b4 *upper)
+{
+    size_t i;
+    hairobb__b4 box_lower = hairobb__b4_set1(FLT_MAX), box_upper = hairobb__b4_set1(-FLT_MAX);
+    for (i = begin; i < end; ++i) {
+        hairobb__b4 lo, hi;
+        hairobb__prefetch_points(b, i, end);
+        hairobb__ref_box_v4(b, i, prep, centre, norms, &lo, &hi);
+        box_lower = hairobb__b4_min(box_lower, lo);
+        box_upper = hairobb__b4_max(box_upper, hi);
+    }
+    *lower = box_lower;
+    *upper = box_upper;
+}
+
+/* A top node's child box in parts (hairobb__top_parts). */
+typedef struct hairobb__boxing {
+    const hairobb__builder *b;
+    const hairobb__range *r;
+    const hairobb__frame_prep *prep;
+    const float *centre, *norms;
+    size_t parts;
+    hairobb__b4 lower[HAIROBB__TOP_PARTS], upper[HAIROBB__TOP_PARTS];
+} hairobb__boxing;
+
+static void hairobb__box_part(void *context, unsigned k)
+{
+    hairobb__boxing *w = HAIROBB__CAST(hairobb__boxing *, context);
+    size_t begin, end;
+    hairobb__part_items(w->r->end - w->r->begin, w->parts, k, &begin, &end);
+    hairobb__positions_box(w->b, w->r->begin + begin, w->r->begin + end, w->prep, w->centre, w->norms, &w->lower[k], &w->upper[k]);
+}
+
 /* The padded box of the range in frame around centre: what a node stores. */
 static void hairobb__node_box(const hairobb__builder *b, const hairobb__range *r, const float frame[9],
                               const float *centre, float lower[3], float upper[3])
 {
-    size_t i;
+    size_t count = r->end - r->begin;
     float norms[3];
     int k;
     hairobb__frame_prep prep;
-    hairobb__b4 box_lower = hairobb__b4_set1(FLT_MAX), box_upper = hairobb__b4_set1(-FLT_MAX);
+    hairobb__b4 box_lower, box_upper;
     hairobb__prepare_frame(frame, &prep);
     for (k = 0; k < 3; ++k)     /* rounded up: the radius must not shrink */
         norms[k] = sqrtf(hairobb__dot3(frame + 3 * k, frame + 3 * k)) * (1.0f + 1.0f / 1048576.0f);
-    for (i = r->begin; i < r->end; ++i) {
-        hairobb__b4 lo, hi;
-        hairobb__prefetch_points(b, i, r->end);
-        hairobb__ref_box_v4(b, i, &prep, centre, norms, &lo, &hi);
-        box_lower = hairobb__b4_min(box_lower, lo);
-        box_upper = hairobb__b4_max(box_upper, hi);
+    if (b->pool && count >= 2 * HAIROBB__TOP_PART_MIN) {
+        hairobb__boxing w;
+        size_t part;
+        w.b = b; w.r = r; w.prep = &prep; w.centre = centre; w.norms = norms;
+        w.parts = count / HAIROBB__TOP_PART_MIN < HAIROBB__TOP_PARTS ? count / HAIROBB__TOP_PART_MIN : HAIROBB__TOP_PARTS;
+        hairobb__top_parts(b, w.parts, hairobb__box_part, &w);
+        box_lower = w.lower[0];
+        box_upper = w.upper[0];
+        for (part = 1; part < w.parts; ++part) {
+            box_lower = hairobb__b4_min(box_lower, w.lower[part]);
+            box_upper = hairobb__b4_max(box_upper, w.upper[part]);
+        }
+    } else {
+        hairobb__positions_box(b, r->begin, r->end, &prep, centre, norms, &box_lower, &box_upper);
     }
     hairobb__b4_store3(lower, box_lower);
     hairobb__b4_store3(upper, box_upper);
@@ -3227,22 +3403,25 @@ static void hairobb__copy_task_points(hairobb__builder *local, const hairobb__ra
 typedef struct hairobb__task_memory {
     void *block;
     size_t bytes;
+    double node_bytes_each;           /* node bytes a reference in the thread's last task; 0: none yet */
 } hairobb__task_memory;
 
-/* Nodes a reference takes, about (combed fur, compressed nodes: 29 to 35
-   bytes): a task's first node block, so that it seldom grows by a copy. */
-#define HAIROBB__NODE_BYTES_GUESS 32
+/* Node bytes a reference takes before a thread has built a task (combed
+   fur and Yeti, compressed nodes: 29 to 33): a task's first node block is
+   its references times the last task's figure (1/16 more), so that it
+   seldom grows, or is copied into a smaller one, at its end. */
+#define HAIROBB__NODE_BYTES_GUESS 36.0
 
 /* memory: the thread's (NULL: the task's own, freed at its end). */
 static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task, hairobb__task_memory *memory)
 {
-    hairobb__task_memory own = {NULL, 0};
+    hairobb__task_memory own = {NULL, 0, 0.0};
+    double reserve;
     hairobb__builder local = *b;
     size_t count = task->range.end - task->range.begin, frame_bytes, copy_bytes, bytes;
     const size_t copy_each = 16 * sizeof(float) + 2 * sizeof(uint32_t);
     local.node_allocation = local.nodes = NULL;
     local.node_bytes = local.node_capacity = 0;
-    local.node_reserve = count < (size_t)-1 / 2 / HAIROBB__NODE_BYTES_GUESS ? count * HAIROBB__NODE_BYTES_GUESS : 0;
     memset(&local.stats, 0, sizeof local.stats);
     local.error = HAIROBB_OK;
     local.task_limit = 0;           /* no tasks within a task; no progress calls */
@@ -3252,6 +3431,8 @@ static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task, ha
     local.frame_capacity = hairobb__frame_capacity(&local, task->range.cap - task->range.begin);
     local.frame_boxes = NULL;
     if (!memory) memory = &own;
+    reserve = (double)count * (memory->node_bytes_each > 0.0 ? memory->node_bytes_each * (17.0 / 16.0) : HAIROBB__NODE_BYTES_GUESS);
+    local.node_reserve = reserve < (double)((size_t)-1 / 4) ? (size_t)reserve : 0;
     /* the points' copy (at the block's alignment; moving hair reads the
        steps' arrays, and indices of 4 k must fit), then the frame boxes */
     frame_bytes = 6 * sizeof(float) * local.frame_capacity;
@@ -3282,6 +3463,7 @@ static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task, ha
             local.node_allocation = local.nodes = exact;
         }
     }
+    if (count) memory->node_bytes_each = (double)local.node_bytes / (double)count;
     task->node_allocation = local.node_allocation;
     task->nodes = local.nodes;
     task->node_bytes = local.node_bytes;
@@ -3305,9 +3487,14 @@ typedef struct hairobb__pool {
     int stop;
     int adding;                       /* more tasks may come: idle threads wait for them */
     int locking;                      /* the lock and the signal exist (threads were started) */
+    /* the top's parts (hairobb__top_parts), which idle threads take before tasks */
+    hairobb_task_fn job;
+    void *job_context;
+    size_t job_parts, job_next, job_left;
 #if HAIROBB__THREADS
     pthread_mutex_t lock;
-    pthread_cond_t added;             /* a task came, the adding ended, or a stop */
+    pthread_cond_t added;             /* a task or a part came, the adding ended, or a stop */
+    pthread_cond_t job_done;          /* the last part of the job ended */
     pthread_t workers[255];
     unsigned started;
 #endif
@@ -3337,14 +3524,25 @@ static void hairobb__run_listed_task(hairobb__pool *p, unsigned index, hairobb__
 static void hairobb__work(hairobb__pool *pool, int calling_thread)
 {
     hairobb__builder *b = pool->b;
-    hairobb__task_memory memory = {NULL, 0};
+    hairobb__task_memory memory = {NULL, 0, 0.0};
     for (;;) {
         size_t k, done;
         int run;
         hairobb__pool_lock(pool, 1);
 #if HAIROBB__THREADS
-        while (pool->adding && !pool->stop && pool->next_task >= pool->task_count)
+        while (pool->adding && !pool->stop && pool->next_task >= pool->task_count && !(pool->job && pool->job_next < pool->job_parts))
             pthread_cond_wait(&pool->added, &pool->lock);
+        if (pool->job && pool->job_next < pool->job_parts) {
+            hairobb_task_fn job = pool->job;
+            void *job_context = pool->job_context;
+            unsigned part = (unsigned)pool->job_next++;
+            hairobb__pool_lock(pool, 0);
+            job(job_context, part);
+            hairobb__pool_lock(pool, 1);
+            if (--pool->job_left == 0) pthread_cond_signal(&pool->job_done);
+            hairobb__pool_lock(pool, 0);
+            continue;
+        }
 #endif
         k = pool->next_task;
         run = !pool->stop && k < pool->task_count;
@@ -3396,6 +3594,11 @@ static void hairobb__pool_start(hairobb__pool *pool, unsigned threads, size_t mo
         pthread_mutex_destroy(&pool->lock);
         return;
     }
+    if (pthread_cond_init(&pool->job_done, NULL) != 0) {
+        pthread_cond_destroy(&pool->added);
+        pthread_mutex_destroy(&pool->lock);
+        return;
+    }
     pool->locking = 1;
     /* fewer threads than asked, if some would not start */
     while (pool->started < threads - 1 && pthread_create(&pool->workers[pool->started], NULL, hairobb__worker, pool) == 0)
@@ -3418,6 +3621,7 @@ static void hairobb__pool_finish(hairobb__pool *pool)
     hairobb__work(pool, 1);
     for (i = 0; i < pool->started; ++i) pthread_join(pool->workers[i], NULL);
     if (pool->locking) {
+        pthread_cond_destroy(&pool->job_done);
         pthread_cond_destroy(&pool->added);
         pthread_mutex_destroy(&pool->lock);
     }
@@ -3474,27 +3678,6 @@ static void hairobb__run_tasks_on_threads(hairobb__pool *pool, unsigned threads)
     hairobb__pool_finish(pool);
 }
 
-/* Passes over every segment outside the tree's recursion (the world boxes
-   first, the gather last) run in parts: at most HAIROBB__PARTS of at least
-   HAIROBB__PART_MIN items, each part's results merged in part order, so
-   any thread count gives the same bits. */
-#define HAIROBB__PARTS 256
-#define HAIROBB__PART_MIN 32768
-
-static size_t hairobb__part_count(size_t items)
-{
-    size_t parts = items / HAIROBB__PART_MIN + 1;
-    return parts > HAIROBB__PARTS ? HAIROBB__PARTS : parts;
-}
-
-/* Items [*begin, *end) of part k of `parts`. */
-static void hairobb__part_items(size_t items, size_t parts, size_t k, size_t *begin, size_t *end)
-{
-    size_t each = items / parts + (items % parts != 0);
-    *begin = k * each < items ? k * each : items;
-    *end = *begin + each < items ? *begin + each : items;
-}
-
 /* run(context, k) for each part k < parts: on the user's parallel_for, or
    on up to `threads` threads with the calling one. */
 static void hairobb__run_parts(unsigned threads, hairobb_parallel_for_fn parallel_for, void *parallel_for_user,
@@ -3515,6 +3698,39 @@ static void hairobb__run_parts(unsigned threads, hairobb_parallel_for_fn paralle
     pool.context = context;
     pool.task_count = parts;
     hairobb__run_tasks_on_threads(&pool, threads);
+}
+
+/* run(context, k) for each part k < parts of a range at the top: on the
+   calling thread, and on the pool's threads that are between tasks. */
+static void hairobb__top_parts(const hairobb__builder *b, size_t parts, hairobb_task_fn run, void *context)
+{
+    hairobb__pool *pool = b->pool;
+    size_t k;
+#if HAIROBB__THREADS
+    if (pool && pool->locking && parts > 1) {
+        pthread_mutex_lock(&pool->lock);
+        pool->job = run;
+        pool->job_context = context;
+        pool->job_parts = parts;
+        pool->job_next = 0;
+        pool->job_left = parts;
+        pthread_cond_broadcast(&pool->added);
+        while (pool->job_next < pool->job_parts) {
+            k = pool->job_next++;
+            pthread_mutex_unlock(&pool->lock);
+            run(context, (unsigned)k);
+            pthread_mutex_lock(&pool->lock);
+            --pool->job_left;
+        }
+        while (pool->job_left) pthread_cond_wait(&pool->job_done, &pool->lock);
+        pool->job = NULL;
+        pthread_mutex_unlock(&pool->lock);
+        return;
+    }
+#else
+    (void)pool;
+#endif
+    for (k = 0; k < parts; ++k) run(context, (unsigned)k);
 }
 
 /* The build's first pass: every position holds its segment whole, with its
