@@ -3397,26 +3397,26 @@ static void hairobb__copy_task_points(hairobb__builder *local, const hairobb__ra
 }
 
 /* A pool thread's memory for its tasks' frame boxes and points, kept from
-   one task to the next: each task's own would be fresh pages, and a page
-   fault costs microseconds (12 on this project's VMs) where a large
-   build's task fills megabytes. */
+   one task to the next where a task needs HAIROBB__KEPT_BYTES or more:
+   malloc maps blocks that large afresh each time, and a page fault costs
+   microseconds (12 on this project's VMs). Smaller blocks come and go
+   with their task (malloc reuses them), so that builds of up to millions
+   of segments allocate alike on any thread count. */
 typedef struct hairobb__task_memory {
     void *block;
     size_t bytes;
-    double node_bytes_each;           /* node bytes a reference in the thread's last task; 0: none yet */
 } hairobb__task_memory;
+#define HAIROBB__KEPT_BYTES ((size_t)32 << 20)
 
-/* Node bytes a reference takes before a thread has built a task (combed
-   fur and Yeti, compressed nodes: 29 to 33): a task's first node block is
-   its references times the last task's figure (1/16 more), so that it
-   seldom grows, or is copied into a smaller one, at its end. */
-#define HAIROBB__NODE_BYTES_GUESS 36.0
+/* Node bytes a reference takes, a little over Yeti's and combed fur's
+   with compressed nodes (29 to 33): a task's first node block, so that
+   it seldom grows by a copy. */
+#define HAIROBB__NODE_BYTES_GUESS 36
 
 /* memory: the thread's (NULL: the task's own, freed at its end). */
 static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task, hairobb__task_memory *memory)
 {
-    hairobb__task_memory own = {NULL, 0, 0.0};
-    double reserve;
+    hairobb__task_memory own = {NULL, 0};
     hairobb__builder local = *b;
     size_t count = task->range.end - task->range.begin, frame_bytes, copy_bytes, bytes;
     const size_t copy_each = 16 * sizeof(float) + 2 * sizeof(uint32_t);
@@ -3430,15 +3430,14 @@ static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task, ha
     local.task_count = local.task_capacity = 0;
     local.frame_capacity = hairobb__frame_capacity(&local, task->range.cap - task->range.begin);
     local.frame_boxes = NULL;
-    if (!memory) memory = &own;
-    reserve = (double)count * (memory->node_bytes_each > 0.0 ? memory->node_bytes_each * (17.0 / 16.0) : HAIROBB__NODE_BYTES_GUESS);
-    local.node_reserve = reserve < (double)((size_t)-1 / 4) ? (size_t)reserve : 0;
+    local.node_reserve = count < (size_t)-1 / 4 / HAIROBB__NODE_BYTES_GUESS ? count * HAIROBB__NODE_BYTES_GUESS : 0;
     /* the points' copy (at the block's alignment; moving hair reads the
        steps' arrays, and indices of 4 k must fit), then the frame boxes */
     frame_bytes = 6 * sizeof(float) * local.frame_capacity;
     copy_bytes = local.time_steps || count > 0xffffffffu / 4 || count > ((size_t)-1 - frame_bytes) / copy_each ? 0
                                                                                                            : count * copy_each;
     bytes = copy_bytes + frame_bytes;
+    if (!memory || bytes < HAIROBB__KEPT_BYTES) memory = &own;
     if (bytes > memory->bytes) {
         if (memory->block) HAIROBB_FREE(memory->block, local.user);
         memory->block = hairobb__malloc_large(bytes, local.user);
@@ -3463,7 +3462,6 @@ static void hairobb__run_task(const hairobb__builder *b, hairobb__task *task, ha
             local.node_allocation = local.nodes = exact;
         }
     }
-    if (count) memory->node_bytes_each = (double)local.node_bytes / (double)count;
     task->node_allocation = local.node_allocation;
     task->nodes = local.nodes;
     task->node_bytes = local.node_bytes;
@@ -3524,7 +3522,7 @@ static void hairobb__run_listed_task(hairobb__pool *p, unsigned index, hairobb__
 static void hairobb__work(hairobb__pool *pool, int calling_thread)
 {
     hairobb__builder *b = pool->b;
-    hairobb__task_memory memory = {NULL, 0, 0.0};
+    hairobb__task_memory memory = {NULL, 0};
     for (;;) {
         size_t k, done;
         int run;
