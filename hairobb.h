@@ -1028,6 +1028,10 @@ struct hairobb_bvh {
 /* The Bezier control points of segment prim as traced at time: defined
    with the kernels ("Segment points as traced"), which read them per leaf. */
 HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16]);
+/* A segment of another basis in Bezier form: defined with the kernels
+   ("Segment points as traced"), in their 4-wide vectors; the builder, the
+   loader, a refit and the .hair reader convert with the same function. */
+HAIROBB__INLINE void hairobb__to_bezier(hairobb_basis basis, const float *p, const float *t, float b[16]);
 
 /* ------------------------------------------------------------------------ */
 /* Input: validation and per-segment bounds                                  */
@@ -1152,41 +1156,6 @@ static const float **hairobb__copy_steps(const float *const *time_vertices, unsi
     if (copy)
         for (k = 0; k < steps; ++k) copy[k] = time_vertices[k];
     return copy;
-}
-
-/* The Bezier control points (x, y, z, r each) of a segment given in another
-   basis: p its points (4, or 2 for Hermite and linear), t the Hermite
-   derivatives. The same cubic, so the same curve and the same u; radii
-   that overshoot below 0 (Catmull-Rom, Hermite) are clamped. Inline, so
-   the AVX2 kernels' copy of hairobb__made_points converts in AVX2 code. */
-HAIROBB__INLINE void hairobb__to_bezier(hairobb_basis basis, const float *p, const float *t, float b[16])
-{
-    int c;
-    for (c = 0; c < 4; ++c) {
-        const float *q = p + c;
-        if (basis == HAIROBB_BASIS_BSPLINE) {
-            b[c] = (q[0] + 4.0f * q[4] + q[8]) / 6.0f;
-            b[4 + c] = (2.0f * q[4] + q[8]) / 3.0f;
-            b[8 + c] = (q[4] + 2.0f * q[8]) / 3.0f;
-            b[12 + c] = (q[4] + 4.0f * q[8] + q[12]) / 6.0f;
-        } else if (basis == HAIROBB_BASIS_CATMULL_ROM) {
-            b[c] = q[4];
-            b[4 + c] = q[4] + (q[8] - q[0]) / 6.0f;
-            b[8 + c] = q[8] - (q[12] - q[4]) / 6.0f;
-            b[12 + c] = q[8];
-        } else if (basis == HAIROBB_BASIS_HERMITE) {
-            b[c] = q[0];
-            b[4 + c] = q[0] + t[c] / 3.0f;
-            b[8 + c] = q[4] - t[4 + c] / 3.0f;
-            b[12 + c] = q[4];
-        } else {   /* linear (Bezier input is used as it is) */
-            b[c] = q[0];
-            b[4 + c] = (2.0f * q[0] + q[4]) / 3.0f;
-            b[8 + c] = (q[0] + 2.0f * q[4]) / 3.0f;
-            b[12 + c] = q[4];
-        }
-    }
-    for (c = 3; c < 16; c += 4) b[c] = hairobb__maxf(b[c], 0.0f);
 }
 
 /* Segments of another basis in Bezier form: 16 floats each, then the
@@ -5487,6 +5456,81 @@ typedef hairobb__v4 hairobb__vn;
 /* ------------------------------------------------------------------------ */
 /* Segment points as traced                                                  */
 /* ------------------------------------------------------------------------ */
+/* The Bezier control points (x, y, z, r each) of a segment given in another
+   basis: p its points (4, or 2 for Hermite and linear), t the Hermite
+   derivatives. The same cubic, so the same curve and the same u; radii
+   that overshoot below 0 (Catmull-Rom, Hermite) are clamped. One vector a
+   point, each lane rounded as a coordinate's plain C was before (the
+   build's trees and the copy's floats did not change): divisions stay
+   divisions (by 6 or 3, not products with a rounded reciprocal), sums
+   associate from the left. The clamp is a max with (-inf, -inf, -inf, 0):
+   max(r, 0) on the radius as hairobb__maxf, and on a coordinate x the
+   identity but for NaN, which no input makes (every caller's points were
+   validated: finite, |x| <= HAIROBB__MAX_COORD); one instruction where a
+   blend of lane 3 took two, three in SSE2. Inline, so the AVX2 kernels'
+   copy of hairobb__made_points converts in AVX2 code. */
+HAIROBB__INLINE void hairobb__to_bezier(hairobb_basis basis, const float *p, const float *t, float b[16])
+{
+    hairobb__v4 b0, b1, b2, b3, radius_floor;
+    switch (basis) {
+    case HAIROBB_BASIS_BSPLINE: {
+        hairobb__v4 p0 = hairobb__v4_load(p), p1 = hairobb__v4_load(p + 4), p2 = hairobb__v4_load(p + 8);
+        hairobb__v4 p3 = hairobb__v4_load(p + 12), two = hairobb__v4_set1(2.0f), four = hairobb__v4_set1(4.0f);
+        hairobb__v4 third = hairobb__v4_set1(3.0f), sixth = hairobb__v4_set1(6.0f);
+        b0 = hairobb__v4_div(hairobb__v4_add(hairobb__v4_add(p0, hairobb__v4_mul(four, p1)), p2), sixth);
+        b1 = hairobb__v4_div(hairobb__v4_add(hairobb__v4_mul(two, p1), p2), third);
+        b2 = hairobb__v4_div(hairobb__v4_add(p1, hairobb__v4_mul(two, p2)), third);
+        b3 = hairobb__v4_div(hairobb__v4_add(hairobb__v4_add(p1, hairobb__v4_mul(four, p2)), p3), sixth);
+        break;
+    }
+    case HAIROBB_BASIS_CATMULL_ROM: {
+        hairobb__v4 p0 = hairobb__v4_load(p), p1 = hairobb__v4_load(p + 4), p2 = hairobb__v4_load(p + 8);
+        hairobb__v4 p3 = hairobb__v4_load(p + 12), sixth = hairobb__v4_set1(6.0f);
+        b0 = p1;
+        b1 = hairobb__v4_add(p1, hairobb__v4_div(hairobb__v4_sub(p2, p0), sixth));
+        b2 = hairobb__v4_sub(p2, hairobb__v4_div(hairobb__v4_sub(p3, p1), sixth));
+        b3 = p2;
+        break;
+    }
+    case HAIROBB_BASIS_HERMITE: {
+        hairobb__v4 third = hairobb__v4_set1(3.0f);
+        b0 = hairobb__v4_load(p);
+        b3 = hairobb__v4_load(p + 4);
+        b1 = hairobb__v4_add(b0, hairobb__v4_div(hairobb__v4_load(t), third));
+        b2 = hairobb__v4_sub(b3, hairobb__v4_div(hairobb__v4_load(t + 4), third));
+        break;
+    }
+    default: {   /* linear (Bezier input is used as it is) */
+        hairobb__v4 two = hairobb__v4_set1(2.0f), third = hairobb__v4_set1(3.0f);
+        b0 = hairobb__v4_load(p);
+        b3 = hairobb__v4_load(p + 4);
+        b1 = hairobb__v4_div(hairobb__v4_add(hairobb__v4_mul(two, b0), b3), third);
+        b2 = hairobb__v4_div(hairobb__v4_add(b0, hairobb__v4_mul(two, b3)), third);
+        break;
+    }
+    }
+    radius_floor = hairobb__v4_set3(-INFINITY, -INFINITY, -INFINITY);
+    hairobb__v4_store(b, hairobb__v4_max(b0, radius_floor));
+    hairobb__v4_store(b + 4, hairobb__v4_max(b1, radius_floor));
+    hairobb__v4_store(b + 8, hairobb__v4_max(b2, radius_floor));
+    hairobb__v4_store(b + 12, hairobb__v4_max(b3, radius_floor));
+}
+
+/* A segment's points p in the BVH's basis (the caller's, or lerped) in
+   Bezier form into scratch, at = their offset in the caller's arrays: each
+   basis its own straight code, its basis a constant. Only Hermite reads
+   tangents, which it has (and it never moves, so p is the caller's there).
+   Bezier points never come here: in place, or lerped and returned. */
+HAIROBB__INLINE void hairobb__converted_points(const hairobb_bvh *bvh, const float *p, size_t at, float scratch[16])
+{
+    switch (bvh->point_basis) {
+    case HAIROBB_BASIS_CATMULL_ROM: hairobb__to_bezier(HAIROBB_BASIS_CATMULL_ROM, p, NULL, scratch); break;
+    case HAIROBB_BASIS_BSPLINE: hairobb__to_bezier(HAIROBB_BASIS_BSPLINE, p, NULL, scratch); break;
+    case HAIROBB_BASIS_HERMITE: hairobb__to_bezier(HAIROBB_BASIS_HERMITE, p, bvh->tangents + at, scratch); break;
+    default: hairobb__to_bezier(HAIROBB_BASIS_LINEAR, p, NULL, scratch); break;
+    }
+}
+
 /* Control points of segment prim made on the fly, into scratch: at time
    (in [0, 1]) for a motion-blurred BVH, each float lerped between the two
    steps around it; converted from the caller's basis without the copy.
@@ -5501,7 +5545,12 @@ static const float *hairobb__made_points(const hairobb_bvh *bvh, uint32_t prim, 
 static const float *hairobb__made_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
 {
     size_t at = 4 * (size_t)bvh->indices[prim];
-    if (bvh->time_steps) {
+    /* static first and apart: the conversion alone then saves no register
+       (with one conversion shared by both paths, a push and a pop each) */
+    if (!bvh->time_steps) {
+        hairobb__converted_points(bvh, bvh->vertices + at, at, scratch);
+        return scratch;
+    } else {
         float f = time * (float)(bvh->time_steps - 1), w, lerped[16];
         float *out = bvh->point_basis == HAIROBB_BASIS_BEZIER ? scratch : lerped;
         unsigned k = (unsigned)f;
@@ -5519,12 +5568,10 @@ static const float *hairobb__made_points(const hairobb_bvh *bvh, uint32_t prim, 
             hairobb__v4_store(out + 4 * j, hairobb__v4_add(hairobb__v4_mul(wa, hairobb__v4_load(a + 4 * j)),
                                                             hairobb__v4_mul(wb, hairobb__v4_load(b + 4 * j))));
         if (out == scratch) return scratch;
-        /* another basis: its points lerped, then converted (linear: 2 points) */
-        hairobb__to_bezier(bvh->point_basis, lerped, NULL, scratch);
+        /* another basis: its points lerped (linear: 2), then converted */
+        hairobb__converted_points(bvh, lerped, at, scratch);
         return scratch;
     }
-    hairobb__to_bezier(bvh->point_basis, bvh->vertices + at, bvh->tangents ? bvh->tangents + at : NULL, scratch);
-    return scratch;
 }
 
 /* The Bezier control points (x y z r, 4 each) of segment prim as traced
@@ -6383,6 +6430,7 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__accept hairobb__accept_avx2
 #define hairobb__bezier_v4 hairobb__bezier_v4_avx2
 #define hairobb__chord_pad hairobb__chord_pad_avx2
+#define hairobb__converted_points hairobb__converted_points_avx2
 #define hairobb__far_scale hairobb__far_scale_avx2
 #define hairobb__hit_at hairobb__hit_at_avx2
 #define hairobb__hit_filtered_out hairobb__hit_filtered_out_avx2
@@ -6408,6 +6456,7 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__segment_points hairobb__segment_points_avx2
 #define hairobb__skipped hairobb__skipped_avx2
 #define hairobb__solve_bracketed hairobb__solve_bracketed_avx2
+#define hairobb__to_bezier hairobb__to_bezier_avx2
 #define hairobb__to_power_form hairobb__to_power_form_avx2
 #define hairobb__traverse hairobb__traverse_avx2
 #define hairobb__try_end hairobb__try_end_avx2
