@@ -2198,6 +2198,14 @@ static void hairobb__bins_merge(hairobb__object_bins *o, const hairobb__object_b
 
 static void hairobb__top_parts(const hairobb__builder *b, size_t parts, hairobb_task_fn run, void *context);
 
+/* Parts a range of the top is binned or boxed in; 0: one pass on the
+   calling thread (no pool, or too few references). */
+static size_t hairobb__top_part_count(const hairobb__builder *b, size_t count)
+{
+    if (!b->pool || count < 2 * HAIROBB__TOP_PART_MIN) return 0;
+    return count / HAIROBB__TOP_PART_MIN < HAIROBB__TOP_PARTS ? count / HAIROBB__TOP_PART_MIN : HAIROBB__TOP_PARTS;
+}
+
 typedef struct hairobb__world_binning {
     const float *boxes;
     size_t count, parts;
@@ -2258,7 +2266,7 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
             hairobb__b4_store3(boxes + 6 * (i - r->begin) + 3, upper);
             hairobb__bounds_grow(&bounds, lower, upper);
         }
-    } else if (b->pool && count >= 2 * HAIROBB__TOP_PART_MIN) {
+    } else if (hairobb__top_part_count(b, count)) {
         /* the top's world binning, in parts (the work area is large: not on the stack) */
         parted = HAIROBB__CAST(hairobb__world_binning *, HAIROBB_MALLOC(sizeof *parted, b->user));
     }
@@ -2266,7 +2274,7 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
         size_t k;
         parted->boxes = boxes;
         parted->count = count;
-        parted->parts = count / HAIROBB__TOP_PART_MIN < HAIROBB__TOP_PARTS ? count / HAIROBB__TOP_PART_MIN : HAIROBB__TOP_PARTS;
+        parted->parts = hairobb__top_part_count(b, count);
         parted->bins = bins;
         hairobb__top_parts(b, parted->parts, hairobb__bound_part, parted);
         bounds = parted->bounds[0];
@@ -2298,7 +2306,7 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
             hairobb__bin_boxes(boxes, count, bins, bounds.centre_min, hairobb__b4_set3(scales), &o);
         }
 #if HAIROBB__SSE
-        if (r->end - r->begin <= 0x7fffffffu) {
+        if (count <= 0x7fffffffu) {
             hairobb__sweep_objects(bins, (const hairobb__b4 (*)[HAIROBB__BINS])o.lower,
                                    (const hairobb__b4 (*)[HAIROBB__BINS])o.upper, (const uint32_t (*)[4])o.count,
                                    box_cost, frame, origins, scales, best);
@@ -2474,11 +2482,11 @@ static void hairobb__node_box(const hairobb__builder *b, const hairobb__range *r
     hairobb__prepare_frame(frame, &prep);
     for (k = 0; k < 3; ++k)     /* rounded up: the radius must not shrink */
         norms[k] = sqrtf(hairobb__dot3(frame + 3 * k, frame + 3 * k)) * (1.0f + 1.0f / 1048576.0f);
-    if (b->pool && count >= 2 * HAIROBB__TOP_PART_MIN) {
+    if (hairobb__top_part_count(b, count)) {
         hairobb__boxing w;
         size_t part;
         w.b = b; w.r = r; w.prep = &prep; w.centre = centre; w.norms = norms;
-        w.parts = count / HAIROBB__TOP_PART_MIN < HAIROBB__TOP_PARTS ? count / HAIROBB__TOP_PART_MIN : HAIROBB__TOP_PARTS;
+        w.parts = hairobb__top_part_count(b, count);
         hairobb__top_parts(b, w.parts, hairobb__box_part, &w);
         box_lower = w.lower[0];
         box_upper = w.upper[0];
