@@ -2249,7 +2249,7 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
     hairobb__world_binning *parted = NULL;
     hairobb__object_bins o;
     hairobb__frame_prep prep;
-    size_t i, count = r->end - r->begin;
+    size_t i, count = r->end - r->begin, parts = 0;
     /* fewer bins than references only wastes sweeps */
     int axis, bins = count < HAIROBB__BINS ? (int)count : HAIROBB__BINS;
     if (frame) {
@@ -2266,7 +2266,7 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
             hairobb__b4_store3(boxes + 6 * (i - r->begin) + 3, upper);
             hairobb__bounds_grow(&bounds, lower, upper);
         }
-    } else if (hairobb__top_part_count(b, count)) {
+    } else if ((parts = hairobb__top_part_count(b, count)) > 1) {
         /* the top's world binning, in parts (the work area is large: not on the stack) */
         parted = HAIROBB__CAST(hairobb__world_binning *, HAIROBB_MALLOC(sizeof *parted, b->user));
     }
@@ -2274,7 +2274,7 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
         size_t k;
         parted->boxes = boxes;
         parted->count = count;
-        parted->parts = hairobb__top_part_count(b, count);
+        parted->parts = parts;
         parted->bins = bins;
         hairobb__top_parts(b, parted->parts, hairobb__bound_part, parted);
         bounds = parted->bounds[0];
@@ -2474,7 +2474,7 @@ static void hairobb__box_part(void *context, unsigned k)
 static void hairobb__node_box(const hairobb__builder *b, const hairobb__range *r, const float frame[9],
                               const float *centre, float lower[3], float upper[3])
 {
-    size_t count = r->end - r->begin;
+    size_t count = r->end - r->begin, parts = hairobb__top_part_count(b, count);
     float norms[3];
     int k;
     hairobb__frame_prep prep;
@@ -2482,11 +2482,11 @@ static void hairobb__node_box(const hairobb__builder *b, const hairobb__range *r
     hairobb__prepare_frame(frame, &prep);
     for (k = 0; k < 3; ++k)     /* rounded up: the radius must not shrink */
         norms[k] = sqrtf(hairobb__dot3(frame + 3 * k, frame + 3 * k)) * (1.0f + 1.0f / 1048576.0f);
-    if (hairobb__top_part_count(b, count)) {
+    if (parts > 1) {
         hairobb__boxing w;
         size_t part;
         w.b = b; w.r = r; w.prep = &prep; w.centre = centre; w.norms = norms;
-        w.parts = hairobb__top_part_count(b, count);
+        w.parts = parts;
         hairobb__top_parts(b, w.parts, hairobb__box_part, &w);
         box_lower = w.lower[0];
         box_upper = w.upper[0];
