@@ -208,6 +208,8 @@ static const variant all_variants[] = {
     HAIROBB_DEFAULTS_ROW("sse2", "hairobb SSE2 path", 0, 0, SSE2),
     HAIROBB_BASIS_ROW("catmull-rom", "hairobb C-R no copy", CATMULL_ROM, OFF),
     HAIROBB_BASIS_ROW("catmull-rom-copy", "hairobb C-R + copy", CATMULL_ROM, ON),
+    HAIROBB_BASIS_ROW("b-spline", "hairobb B-sp no copy", BSPLINE, OFF),
+    HAIROBB_BASIS_ROW("b-spline-copy", "hairobb B-sp + copy", BSPLINE, ON),
     EMBREE_ROW("embree-r4", "Embree flat r4", EMB_FLAT_BEZIER, 4, 1, 1),
     EMBREE_ROW("embree-r8", "Embree flat r8", EMB_FLAT_BEZIER, 8, 1, 1),
     EMBREE_ROW("embree-r16", "Embree flat r16", EMB_FLAT_BEZIER, 16, 1, 1),
@@ -234,7 +236,7 @@ static const struct { const char *name, *members; } variant_groups[] = {
     {"precision", "default,exact4,exact16,pieces4,pieces8,pieces16"},
     {"ablation", "aabb,obb,mixed-uncompressed,spatial,spatial-compressed,spatial-compressed-cluster,shared,compressed-shared,default"},
     {"mixed", "default"},
-    {"bases", "default,catmull-rom,catmull-rom-copy"},
+    {"bases", "default,catmull-rom,catmull-rom-copy,b-spline,b-spline-copy"},
     /* a Catmull-Rom scene (yeti) without --variants: hairobb without the copy, Embree on the same buffers */
     {"yeti", "catmull-rom,embree-r4,embree-round"},
 };
@@ -297,11 +299,14 @@ static int variant_embree_type(const variant *v, const hair_scene *s)
 }
 
 /* Whether the reference judges a variant's surface: on a Catmull-Rom scene
-   the reference reads the segments' Bezier form, the curves hairobb's rows
-   trace; on a Bezier scene the "catmull-rom" rows read other curves. */
+   the reference reads the segments' Bezier form, the curves hairobb's
+   Catmull-Rom and default rows trace; the B-spline rows, and on a Bezier
+   scene every basis row, read other curves through the same points. */
 static int variant_comparable(const variant *v, scene_basis basis)
 {
-    return basis == SCENE_BASIS_CATMULL_ROM && v->lib == LIB_HAIROBB ? 1 : v->accuracy_comparable;
+    if (basis == SCENE_BASIS_CATMULL_ROM && v->lib == LIB_HAIROBB)   /* its own basis or the Bezier default (made C-R) */
+        return v->basis == HAIROBB_BASIS_BEZIER || v->basis == HAIROBB_BASIS_CATMULL_ROM;
+    return v->accuracy_comparable;
 }
 
 /* The hairobb variant whose BVH spawns the secondary rays (and is kept for
@@ -1800,7 +1805,8 @@ static void print_help(void)
            "                        build-1t (defaults built on 1 thread), filter (a hit filter taking every hit),\n"
            "                        sse2 (the SSE2 kernels, where the build has them: not with -mavx2 or -march)\n"
            "                        catmull-rom, catmull-rom-copy (Catmull-Rom basis, without and with the Bezier\n"
-           "                        copy: on Bezier scenes other curves through the same points)\n"
+           "                        copy: on Bezier scenes other curves through the same points),\n"
+           "                        b-spline, b-spline-copy (the same for the uniform B-spline basis)\n"
            "                      Embree: embree-r4, embree-r8, embree-r16 (flat), embree-round\n"
            "                      groups: all, hairobb, embree, precision, ablation, bases,\n"
            "                        yeti (catmull-rom: hairobb C-R without the Bezier copy, embree-r4, embree-round)\n"

@@ -5,8 +5,9 @@
 #include <stddef.h>
 /* HAIROBB__AVX2 is 1 in kernels compiled for AVX2: the count shows which
    copy of the kernels traced */
-static size_t leaf_visits[2];
+static size_t leaf_visits[2], points_made[2];
 #define HAIROBB__LEAF_VISIT(rs, prim) ((void)(rs), (void)(prim), ++leaf_visits[HAIROBB__AVX2], 0)
+#define HAIROBB__POINTS_MADE() (++points_made[HAIROBB__AVX2])
 #define HAIROBB_STATIC
 #define HAIROBB_IMPLEMENTATION
 #include "../hairobb.h"
@@ -18,7 +19,7 @@ SIMD_VARIANT_SIGNATURE(VARIANT)
     size_t i;
     if (hairobb_build(vertices, vertex_count, indices, segment_count, options, &bvh) != HAIROBB_OK) return 0;
     *used = hairobb_get_simd(bvh);
-    leaf_visits[0] = leaf_visits[1] = 0;
+    leaf_visits[0] = leaf_visits[1] = points_made[0] = points_made[1] = 0;
     for (i = 0; i < ray_count; ++i) {
         hairobb_intersect1(bvh, &rays[i], &hits[i]);
         occluded[i] = hairobb_occluded1(bvh, &rays[i]);
@@ -26,5 +27,7 @@ SIMD_VARIANT_SIGNATURE(VARIANT)
     hairobb_free(bvh);
     visits[0] = leaf_visits[0];
     visits[1] = leaf_visits[1];
+    visits[2] = points_made[0];
+    visits[3] = points_made[1];
     return 1;
 }

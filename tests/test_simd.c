@@ -2,8 +2,9 @@
    the same rays traced by four builds of hairobb.h (plain C; SSE4.1; AVX2;
    the x86-64 baseline, forced to SSE2 and dispatched to its AVX2 kernels),
    compared field by field, bit for bit, on several scenes, node policies and
-   intersector precisions, and on moving hair (motion blur: rotating and
-   translating fur, 2 to 4 time steps) at random ray times. */
+   intersector precisions, curve bases read with and without the Bezier
+   copy, and on moving hair (motion blur: rotating and translating fur, 2
+   to 4 time steps) at random ray times. */
 #define _POSIX_C_SOURCE 200809L
 #include "simd_variant.h"
 #include "check.h"
@@ -63,7 +64,9 @@ static void compare_paths(const hair_scene *s, const hairobb_build_options *opti
     int *occluded_plain = (int *)malloc(sizeof(int) * n), *occluded_other = (int *)malloc(sizeof(int) * n);
     int have_avx = __builtin_cpu_supports("avx2"), k;
     hairobb_simd used = HAIROBB_SIMD_AUTO;
-    size_t visits[2];
+    size_t visits[4];
+    /* points read where they are, or made on the fly by the path's makers */
+    int made = options->time_steps >= 2 || (options->basis != HAIROBB_BASIS_BEZIER && options->bezier_copy == HAIROBB_OFF);
     /* the x86-64 baseline copy has the AVX2 kernels too: AUTO picks them where the CPU has AVX2 */
     simd_path paths[4] = {
         {"SSE4.1", trace_sse, HAIROBB_SIMD_SSE41, HAIROBB_SIMD_SSE41, 0},
@@ -107,6 +110,11 @@ static void compare_paths(const hair_scene *s, const hairobb_build_options *opti
         CHECK(visits[used == HAIROBB_SIMD_AVX2] > 0 && visits[used != HAIROBB_SIMD_AVX2] == 0,
               "%s %s: %s reports %s, leaves reached by baseline/AVX2 kernels %zu/%zu", s->name, what, paths[k].name,
               path_name(used), visits[0], visits[1]);
+        /* and so are the makers they called (hit attributes, in baseline code, may call the baseline's) */
+        CHECK(made ? (visits[3] > 0) == (used == HAIROBB_SIMD_AVX2) && (visits[2] > 0 || used == HAIROBB_SIMD_AVX2)
+                   : visits[2] + visits[3] == 0,
+              "%s %s: %s reports %s, points made by baseline/AVX2 makers %zu/%zu", s->name, what, paths[k].name,
+              path_name(used), visits[2], visits[3]);
         for (i = 0; i < n; ++i) differ[k] += !same_hit(&plain[i], &other[i]) || occluded_plain[i] != occluded_other[i];
         CHECK(differ[k] == 0, "%s %s: %s differs from plain C on %zu of %zu rays", s->name, what, paths[k].name, differ[k], n);
         printf(" %s (%s) %zu%s", paths[k].name, path_name(used), differ[k], k < 3 ? "," : "");
@@ -194,6 +202,27 @@ int main(void)
             compare_paths(&scenes[k], &options, "per-child float OBBs");
             options.obb_layout = HAIROBB_OBB_COMPRESSED;
             compare_paths(&scenes[k], &options, "compressed, shared byte rotation");
+        }
+        {
+            /* other bases through the same points, read without the copy
+               (each basis its maker) and, for one, with it; Hermite takes
+               the points as its tangents too */
+            static const struct { const char *name; hairobb_basis basis; hairobb_switch copy; } bases[] = {
+                {"B-spline, no copy", HAIROBB_BASIS_BSPLINE, HAIROBB_OFF},
+                {"Catmull-Rom, no copy", HAIROBB_BASIS_CATMULL_ROM, HAIROBB_OFF},
+                {"Catmull-Rom, copy", HAIROBB_BASIS_CATMULL_ROM, HAIROBB_ON},
+                {"Hermite, no copy", HAIROBB_BASIS_HERMITE, HAIROBB_OFF},
+                {"linear, no copy", HAIROBB_BASIS_LINEAR, HAIROBB_OFF},
+            };
+            size_t b;
+            for (b = 0; b < sizeof bases / sizeof bases[0]; ++b) {
+                hairobb_build_options options;
+                memset(&options, 0, sizeof options);
+                options.basis = bases[b].basis;
+                options.bezier_copy = bases[b].copy;
+                options.tangents = bases[b].basis == HAIROBB_BASIS_HERMITE ? scenes[k].vertices : NULL;
+                compare_paths(&scenes[k], &options, bases[b].name);
+            }
         }
         scene_free(&scenes[k]);
     }
