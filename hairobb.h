@@ -979,10 +979,6 @@ typedef struct hairobb__compressed_obb_node {
 typedef char hairobb__compressed_obb_node_size[sizeof(hairobb__compressed_obb_node) == (HAIROBB__W == 8 ? 208 : 128) ? 1 : -1];
 typedef char hairobb__compressed_node_size[sizeof(hairobb__compressed_node) == (HAIROBB__W == 8 ? 160 : 96) ? 1 : -1];
 
-/* Makes segment prim's Bezier points at time into scratch, for BVHs whose
-   points are not in place ("Segment points as traced"). */
-typedef const float *(*hairobb__points_maker)(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16]);
-
 struct hairobb_bvh {
     const float *vertices;            /* Bezier control points: the caller's, or curves */
     const uint32_t *indices;
@@ -1029,12 +1025,7 @@ struct hairobb_bvh {
     unsigned time_steps;
     const float **time_vertices;
     int points_in_place;              /* static Bezier points (input or copy): read where they are */
-    /* otherwise, each pass of the kernels' maker: [0] the compiler's target, [1] the AVX2 pass */
-    hairobb__points_maker make_points[2];
 };
-
-/* Sets points_in_place and make_points from the basis and time steps. */
-static void hairobb__choose_points(hairobb_bvh *bvh);
 
 /* The Bezier control points of segment prim as traced at time: defined
    with the kernels ("Segment points as traced"), which read them per leaf. */
@@ -4178,7 +4169,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     bvh->max_leaf_size = opt.max_leaf_size;
     bvh->simd = simd;
     bvh->time_steps = steps;
-    hairobb__choose_points(bvh);
+    bvh->points_in_place = bvh->point_basis == HAIROBB_BASIS_BEZIER && !steps;
     hairobb__setup_pieces(bvh, (int)opt.curve_pieces);
     bvh->stats = b.stats;
     bvh->stats.node_bytes = bvh->node_bytes;
@@ -4977,7 +4968,7 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
         bvh->point_basis = opt.basis;
         bvh->tangents = opt.tangents;
     }
-    hairobb__choose_points(bvh);
+    bvh->points_in_place = bvh->point_basis == HAIROBB_BASIS_BEZIER && !bvh->time_steps;
     bvh->segment_count = segment_count;
     if (opt.verify_hair != HAIROBB_OFF &&
         (hairobb__get64(in + HAIROBB__AT_VERTICES) != (uint64_t)hairobb__traced_vertex_count(bvh) ||
@@ -5489,8 +5480,8 @@ typedef hairobb__v4 hairobb__vn;
    max(r, 0) on the radius as hairobb__maxf, and on a coordinate x the
    identity but for NaN, which no input makes (every caller's points were
    validated: finite, |x| <= HAIROBB__MAX_COORD); one instruction where a
-   blend of lane 3 took two, three in SSE2. Inline, so the AVX2 kernels'
-   point makers convert in AVX2 code. */
+   blend of lane 3 took two, three in SSE2. Inline, so the AVX2 kernels
+   convert in AVX2 code. */
 HAIROBB__INLINE void hairobb__to_bezier(hairobb_basis basis, const float *p, const float *t, float b[16])
 {
     hairobb__v4 b0, b1, b2, b3, radius_floor;
@@ -5559,62 +5550,24 @@ HAIROBB__INLINE void hairobb__converted_points(const hairobb_bvh *bvh, const flo
     }
 }
 
-/* The point makers: control points of segment prim made on the fly, into
-   scratch, for BVHs whose points are not in place. One per static basis,
-   with nothing to decide (the tests for motion and the basis were a third
-   of a B-spline conversion's instructions), and one for motion blur: at
-   time (in [0, 1]) each float lerped between the two steps around it, then
-   converted. The BVH holds the one it needs (hairobb__points_maker_for) and
-   the traversal calls it through a pointer. Out of line (a cold path beside
-   the leaf's), compiled with each pass of the kernels: AVX2 code calling
-   SSE code was 2x slower (see tests/check_dispatch_calls.sh). No FMA in any
-   pass, so they round alike. */
-#ifndef HAIROBB__POINTS_MADE   /* instrumented builds (tests/simd_variant.c) count the makers' calls */
+/* Instrumented builds (tests/simd_variant.c) count the segments whose
+   points are made on the fly, per pass of the kernels. */
+#ifndef HAIROBB__POINTS_MADE
 #define HAIROBB__POINTS_MADE() ((void)0)
 #endif
+
+/* Control points of a moving segment prim at time (in [0, 1]), made into
+   scratch: each float lerped between the two steps around it, then
+   converted from another basis. Out of line (a cold path beside the
+   leaf's), compiled with each pass of the kernels: AVX2 code calling SSE
+   code was 2x slower (see tests/check_dispatch_calls.sh). No FMA in any
+   pass, so they round alike. */
+static const float *hairobb__made_moving(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
 #if defined(__GNUC__) || defined(__clang__)
-#define HAIROBB__POINTS_MAKER(name) \
-    static const float *name(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16]) __attribute__((noinline)); \
-    static const float *name(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
-#else
-#define HAIROBB__POINTS_MAKER(name) \
-    static const float *name(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
+    __attribute__((noinline))
 #endif
-
-HAIROBB__POINTS_MAKER(hairobb__made_bspline)
-{
-    (void)time;
-    HAIROBB__POINTS_MADE();
-    hairobb__to_bezier(HAIROBB_BASIS_BSPLINE, bvh->vertices + 4 * (size_t)bvh->indices[prim], NULL, scratch);
-    return scratch;
-}
-
-HAIROBB__POINTS_MAKER(hairobb__made_catmull_rom)
-{
-    (void)time;
-    HAIROBB__POINTS_MADE();
-    hairobb__to_bezier(HAIROBB_BASIS_CATMULL_ROM, bvh->vertices + 4 * (size_t)bvh->indices[prim], NULL, scratch);
-    return scratch;
-}
-
-HAIROBB__POINTS_MAKER(hairobb__made_hermite)
-{
-    size_t at = 4 * (size_t)bvh->indices[prim];
-    (void)time;
-    HAIROBB__POINTS_MADE();
-    hairobb__to_bezier(HAIROBB_BASIS_HERMITE, bvh->vertices + at, bvh->tangents + at, scratch);
-    return scratch;
-}
-
-HAIROBB__POINTS_MAKER(hairobb__made_linear)
-{
-    (void)time;
-    HAIROBB__POINTS_MADE();
-    hairobb__to_bezier(HAIROBB_BASIS_LINEAR, bvh->vertices + 4 * (size_t)bvh->indices[prim], NULL, scratch);
-    return scratch;
-}
-
-HAIROBB__POINTS_MAKER(hairobb__made_moving)
+    ;
+static const float *hairobb__made_moving(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
 {
     size_t at = 4 * (size_t)bvh->indices[prim];
     float f = time * (float)(bvh->time_steps - 1), w, lerped[16];
@@ -5623,7 +5576,6 @@ HAIROBB__POINTS_MAKER(hairobb__made_moving)
     const float *a, *b;
     int j, points = (int)hairobb__basis_points(bvh->point_basis);
     hairobb__v4 wa, wb;
-    HAIROBB__POINTS_MADE();
     if (k > bvh->time_steps - 2) k = bvh->time_steps - 2;
     w = f - (float)k;
     wa = hairobb__v4_set1(1.0f - w);
@@ -5640,35 +5592,26 @@ HAIROBB__POINTS_MAKER(hairobb__made_moving)
     return scratch;
 }
 
-/* The maker a BVH's points need in this pass of the kernels; NULL for
-   points read in place. */
-static hairobb__points_maker hairobb__points_maker_for(const hairobb_bvh *bvh)
-{
-    if (bvh->points_in_place) return NULL;
-    if (bvh->time_steps) return hairobb__made_moving;
-    switch (bvh->point_basis) {
-    case HAIROBB_BASIS_BSPLINE: return hairobb__made_bspline;
-    case HAIROBB_BASIS_CATMULL_ROM: return hairobb__made_catmull_rom;
-    case HAIROBB_BASIS_HERMITE: return hairobb__made_hermite;
-    default: return hairobb__made_linear;
-    }
-}
-
 /* The Bezier control points (x y z r, 4 each) of segment prim as traced
    at time (a ray's; unused by static BVHs): every traversal path reads a
-   segment through here, with one predictable branch. scratch: room for
-   points made on the fly, by this pass's maker. */
-#undef HAIROBB__MAKER_PASS
-#ifdef HAIROBB__KERNEL_PASS
-#define HAIROBB__MAKER_PASS 1
-#else
-#define HAIROBB__MAKER_PASS 0
-#endif
+   segment through here. Static points of another basis are converted
+   inline: B-spline then costs 3.7-4.2% more instructions a ray than the
+   copy, against 5.7-6.3% out of line (one function testing motion and
+   the basis) and 4.0-4.3% through a pointer to a function per basis,
+   and primary rays took about 3% more time, against 9% (the README's
+   paragraph on bases without the copy). scratch: room for points made on
+   the fly. */
 HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
 {
-    /* likely: the default's layout, the maker's call out of its way */
+    /* likely: the default's layout, the other paths out of its way */
     if (HAIROBB__LIKELY(bvh->points_in_place)) return bvh->vertices + 4 * (size_t)bvh->indices[prim];
-    return bvh->make_points[HAIROBB__MAKER_PASS](bvh, prim, time, scratch);
+    HAIROBB__POINTS_MADE();
+    if (!bvh->time_steps) {
+        size_t at = 4 * (size_t)bvh->indices[prim];
+        hairobb__converted_points(bvh, bvh->vertices + at, at, scratch);
+        return scratch;
+    }
+    return hairobb__made_moving(bvh, prim, time, scratch);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -6460,19 +6403,6 @@ static int hairobb__hit_filtered_out(const hairobb__ray_state *rs, uint32_t prim
 static int hairobb__traverse_avx2(const hairobb_bvh *bvh, hairobb__ray_state *rs, int any_hit) __attribute__((target("avx2")));
 #endif
 
-#if HAIROBB__DISPATCH
-static hairobb__points_maker hairobb__points_maker_for_avx2(const hairobb_bvh *bvh) __attribute__((target("avx2")));
-#endif
-
-static void hairobb__choose_points(hairobb_bvh *bvh)
-{
-    bvh->points_in_place = bvh->point_basis == HAIROBB_BASIS_BEZIER && !bvh->time_steps;
-    bvh->make_points[0] = bvh->make_points[1] = hairobb__points_maker_for(bvh);
-#if HAIROBB__DISPATCH
-    bvh->make_points[1] = hairobb__points_maker_for_avx2(bvh);
-#endif
-}
-
 /* The traversal of the BVH's path (every path gives the same answers). */
 static int hairobb__trace(const hairobb_bvh *bvh, hairobb__ray_state *rs, int any_hit)
 {
@@ -6544,13 +6474,8 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__intersect_rotated_node hairobb__intersect_rotated_node_avx2
 #define hairobb__intersect_segment hairobb__intersect_segment_avx2
 #define hairobb__joint_at hairobb__joint_at_avx2
-#define hairobb__made_bspline hairobb__made_bspline_avx2
-#define hairobb__made_catmull_rom hairobb__made_catmull_rom_avx2
-#define hairobb__made_hermite hairobb__made_hermite_avx2
-#define hairobb__made_linear hairobb__made_linear_avx2
 #define hairobb__made_moving hairobb__made_moving_avx2
 #define hairobb__piece_ends hairobb__piece_ends_avx2
-#define hairobb__points_maker_for hairobb__points_maker_for_avx2
 #define hairobb__piece_hit hairobb__piece_hit_avx2
 #define hairobb__ray_points_v4 hairobb__ray_points_v4_avx2
 #define hairobb__ray_row_v4 hairobb__ray_row_v4_avx2

@@ -2,8 +2,9 @@
    the path the BVH traced with; visits[0] and visits[1] count the segments
    of leaves the copy's kernels reached that were compiled without and with
    AVX2 (instrumented through HAIROBB__LEAF_VISIT), visits[2] and visits[3]
-   the segments' points made on the fly by makers compiled without and with
-   AVX2 (HAIROBB__POINTS_MADE). */
+   the segments whose points were made on the fly (another basis without
+   the copy, or motion) by code compiled without and with AVX2
+   (HAIROBB__POINTS_MADE). */
 #ifndef HAIROBB_TESTS_SIMD_VARIANT_H
 #define HAIROBB_TESTS_SIMD_VARIANT_H
 #include "../hairobb.h"

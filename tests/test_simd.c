@@ -65,7 +65,7 @@ static void compare_paths(const hair_scene *s, const hairobb_build_options *opti
     int have_avx = __builtin_cpu_supports("avx2"), k;
     hairobb_simd used = HAIROBB_SIMD_AUTO;
     size_t visits[4];
-    /* points read where they are, or made on the fly by the path's makers */
+    /* points read where they are, or made on the fly by the path's own code */
     int made = options->time_steps >= 2 || (options->basis != HAIROBB_BASIS_BEZIER && options->bezier_copy == HAIROBB_OFF);
     /* the x86-64 baseline copy has the AVX2 kernels too: AUTO picks them where the CPU has AVX2 */
     simd_path paths[4] = {
@@ -110,7 +110,7 @@ static void compare_paths(const hair_scene *s, const hairobb_build_options *opti
         CHECK(visits[used == HAIROBB_SIMD_AVX2] > 0 && visits[used != HAIROBB_SIMD_AVX2] == 0,
               "%s %s: %s reports %s, leaves reached by baseline/AVX2 kernels %zu/%zu", s->name, what, paths[k].name,
               path_name(used), visits[0], visits[1]);
-        /* and so are the makers they called (hit attributes, in baseline code, may call the baseline's) */
+        /* and so is the code that made points on the fly (hit attributes, baseline code, make them there too) */
         CHECK(made ? (visits[3] > 0) == (used == HAIROBB_SIMD_AVX2) && (visits[2] > 0 || used == HAIROBB_SIMD_AVX2)
                    : visits[2] + visits[3] == 0,
               "%s %s: %s reports %s, points made by baseline/AVX2 makers %zu/%zu", s->name, what, paths[k].name,
@@ -205,8 +205,8 @@ int main(void)
         }
         {
             /* other bases through the same points, read without the copy
-               (each basis its maker) and, for one, with it; Hermite takes
-               the points as its tangents too */
+               and, for one, with it; Hermite takes the points as its
+               tangents too */
             static const struct { const char *name; hairobb_basis basis; hairobb_switch copy; } bases[] = {
                 {"B-spline, no copy", HAIROBB_BASIS_BSPLINE, HAIROBB_OFF},
                 {"Catmull-Rom, no copy", HAIROBB_BASIS_CATMULL_ROM, HAIROBB_OFF},
