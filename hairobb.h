@@ -5484,7 +5484,7 @@ typedef hairobb__v4 hairobb__vn;
    convert in AVX2 code. */
 HAIROBB__INLINE void hairobb__to_bezier(hairobb_basis basis, const float *p, const float *t, float b[16])
 {
-    hairobb__v4 b0, b1, b2, b3, radius_floor;
+    hairobb__v4 b0, b1, b2, b3;
     switch (basis) {
     case HAIROBB_BASIS_BSPLINE: {
         hairobb__v4 p0 = hairobb__v4_load(p), p1 = hairobb__v4_load(p + 4), p2 = hairobb__v4_load(p + 8);
@@ -5523,7 +5523,7 @@ HAIROBB__INLINE void hairobb__to_bezier(hairobb_basis basis, const float *p, con
     }
     }
     if (basis == HAIROBB_BASIS_CATMULL_ROM || basis == HAIROBB_BASIS_HERMITE) {
-        radius_floor = hairobb__v4_set3(-INFINITY, -INFINITY, -INFINITY);
+        hairobb__v4 radius_floor = hairobb__v4_set3(-INFINITY, -INFINITY, -INFINITY);
         b0 = hairobb__v4_max(b0, radius_floor);
         b1 = hairobb__v4_max(b1, radius_floor);
         b2 = hairobb__v4_max(b2, radius_floor);
@@ -5595,12 +5595,9 @@ static const float *hairobb__made_moving(const hairobb_bvh *bvh, uint32_t prim, 
 /* The Bezier control points (x y z r, 4 each) of segment prim as traced
    at time (a ray's; unused by static BVHs): every traversal path reads a
    segment through here. Static points of another basis are converted
-   inline: B-spline then costs 3.7-4.2% more instructions a ray than the
-   copy, against 5.7-6.3% out of line (one function testing motion and
-   the basis) and 4.0-4.3% through a pointer to a function per basis,
-   and primary rays took about 3% more time, against 9% (the README's
-   paragraph on bases without the copy). scratch: room for points made on
-   the fly. */
+   inline: out of line, or through a pointer to a function per basis,
+   they cost more instructions and more time (the README's paragraph on
+   bases without the copy). scratch: room for points made on the fly. */
 HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
 {
     /* likely: the default's layout, the other paths out of its way */

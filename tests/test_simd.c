@@ -113,7 +113,7 @@ static void compare_paths(const hair_scene *s, const hairobb_build_options *opti
         /* and so is the code that made points on the fly (hit attributes, baseline code, make them there too) */
         CHECK(made ? (visits[3] > 0) == (used == HAIROBB_SIMD_AVX2) && (visits[2] > 0 || used == HAIROBB_SIMD_AVX2)
                    : visits[2] + visits[3] == 0,
-              "%s %s: %s reports %s, points made by baseline/AVX2 makers %zu/%zu", s->name, what, paths[k].name,
+              "%s %s: %s reports %s, segments made on the fly by baseline/AVX2 code %zu/%zu", s->name, what, paths[k].name,
               path_name(used), visits[2], visits[3]);
         for (i = 0; i < n; ++i) differ[k] += !same_hit(&plain[i], &other[i]) || occluded_plain[i] != occluded_other[i];
         CHECK(differ[k] == 0, "%s %s: %s differs from plain C on %zu of %zu rays", s->name, what, paths[k].name, differ[k], n);
