@@ -767,6 +767,17 @@ static void *hairobb__malloc_large(size_t bytes, void *user)
 #endif
 #endif
 #define HAIROBB__W HAIROBB_NODE_WIDTH
+/* What a zero (or AUTO) field of hairobb_build_options means: the defaults,
+   set in one place (hairobb__resolve_options). */
+#define HAIROBB__DEFAULT_MAX_LEAF 4u
+#define HAIROBB__DEFAULT_CANDIDATES 2u
+#define HAIROBB__DEFAULT_PIECES 8u
+#define HAIROBB__DEFAULT_SPLIT_BUDGET 0.25f
+#define HAIROBB__DEFAULT_OBB_LAYOUT HAIROBB_OBB_COMPRESSED_PER_CHILD
+#define HAIROBB__DEFAULT_SPATIAL_SPLITS HAIROBB_OFF
+#define HAIROBB__DEFAULT_CLUSTERING HAIROBB_OFF
+#define HAIROBB__MAX_THREADS 256u
+#define HAIROBB__MAX_SPLIT_BUDGET 4.0f
 /* A range a full node could not split further becomes a leaf, not a node of
    its own, up to this many segments: -35% memory at equal or better speed
    (combed, straight.hair, furBall_A). */
@@ -979,6 +990,15 @@ typedef struct hairobb__compressed_obb_node {
 typedef char hairobb__compressed_obb_node_size[sizeof(hairobb__compressed_obb_node) == (HAIROBB__W == 8 ? 208 : 128) ? 1 : -1];
 typedef char hairobb__compressed_node_size[sizeof(hairobb__compressed_node) == (HAIROBB__W == 8 ? 160 : 96) ? 1 : -1];
 
+/* What shapes a tree and its intersector: the build's resolved options,
+   which hairobb_save records and hairobb_load reads back. */
+typedef struct hairobb__tree_settings {
+    hairobb_precision precision;
+    hairobb_node_policy policy;
+    hairobb_obb_layout obb_layout;
+    unsigned max_leaf_size, pieces;
+} hairobb__tree_settings;
+
 struct hairobb_bvh {
     const float *vertices;            /* Bezier control points: the caller's, or curves */
     const uint32_t *indices;
@@ -1088,6 +1108,37 @@ static hairobb_result hairobb__choose_simd(hairobb_simd requested, hairobb_simd 
     return requested == HAIROBB__BASELINE_SIMD ? HAIROBB_OK : HAIROBB_ERROR_UNSUPPORTED;
 }
 
+/* Which options the caller reads: a build all of them, a load those that do
+   not shape the tree (the rest are the saved BVH's). */
+enum { HAIROBB__FOR_BUILD, HAIROBB__FOR_LOAD };
+
+/* The options as given (NULL: all zero) into *opt, every zero or AUTO field
+   that stands for a default set to it; INVALID_ARGUMENT for a value out of
+   range among the fields the purpose reads. */
+static hairobb_result hairobb__resolve_options(const hairobb_build_options *given, int purpose, hairobb_build_options *opt)
+{
+    if (given) *opt = *given; else memset(opt, 0, sizeof *opt);
+    if ((unsigned)opt->basis > HAIROBB_BASIS_LINEAR || (opt->basis == HAIROBB_BASIS_HERMITE) != (opt->tangents != NULL) ||
+        (unsigned)opt->simd > HAIROBB_SIMD_AVX2 || opt->threads > HAIROBB__MAX_THREADS)
+        return HAIROBB_ERROR_INVALID_ARGUMENT;
+    if (purpose == HAIROBB__FOR_LOAD) return (unsigned)opt->verify_hair > HAIROBB_OFF ? HAIROBB_ERROR_INVALID_ARGUMENT : HAIROBB_OK;
+    if (opt->max_leaf_size == 0) opt->max_leaf_size = HAIROBB__DEFAULT_MAX_LEAF;
+    if (opt->hair_space_candidates == 0) opt->hair_space_candidates = HAIROBB__DEFAULT_CANDIDATES;
+    if (opt->curve_pieces == 0) opt->curve_pieces = HAIROBB__DEFAULT_PIECES;
+    if (opt->spatial_split_budget == 0.0f) opt->spatial_split_budget = HAIROBB__DEFAULT_SPLIT_BUDGET;
+    if ((unsigned)opt->nodes > HAIROBB_NODES_OBB_ONLY || (unsigned)opt->precision > HAIROBB_PRECISION_PIECES ||
+        (unsigned)opt->obb_layout > HAIROBB_OBB_COMPRESSED_PER_CHILD ||
+        (unsigned)opt->spatial_splits > HAIROBB_OFF || (unsigned)opt->clustering > HAIROBB_OFF ||
+        !(opt->spatial_split_budget >= 0.0f && opt->spatial_split_budget <= HAIROBB__MAX_SPLIT_BUDGET) ||
+        opt->max_leaf_size > HAIROBB__MAX_LEAF || opt->hair_space_candidates > HAIROBB__MAX_CANDIDATES ||
+        opt->curve_pieces > HAIROBB__MAX_PIECES)
+        return HAIROBB_ERROR_INVALID_ARGUMENT;
+    if (opt->obb_layout == HAIROBB_OBB_DEFAULT) opt->obb_layout = HAIROBB__DEFAULT_OBB_LAYOUT;
+    if (opt->spatial_splits == HAIROBB_AUTO) opt->spatial_splits = HAIROBB__DEFAULT_SPATIAL_SPLITS;
+    if (opt->clustering == HAIROBB_AUTO) opt->clustering = HAIROBB__DEFAULT_CLUSTERING;
+    return HAIROBB_OK;
+}
+
 /* Control points a segment of the basis reads from indices[i] on. */
 HAIROBB__INLINE size_t hairobb__basis_points(hairobb_basis basis)
 {
@@ -1150,6 +1201,19 @@ static hairobb_result hairobb__validate_motion(const hairobb_build_options *opt,
     return HAIROBB_OK;
 }
 
+/* The hair arrays hairobb_build and hairobb_load take, validated; moving
+   hair: *vertices = its first step, *steps = time_steps (else 0). */
+static hairobb_result hairobb__validate_hair(const hairobb_build_options *opt, const float **vertices, size_t vertex_count,
+                                             const uint32_t *indices, size_t segment_count, unsigned *steps)
+{
+    if (opt->time_steps < 2) {
+        hairobb_result result = hairobb__validate(*vertices, vertex_count, indices, segment_count,
+                                                  hairobb__basis_points(opt->basis), opt->tangents);
+        if (result != HAIROBB_OK) return result;
+    }
+    return hairobb__validate_motion(opt, vertex_count, indices, segment_count, vertices, steps);
+}
+
 /* A copy of the steps' pointers (the BVH's, freed with it); NULL when out of memory. */
 static const float **hairobb__copy_steps(const float *const *time_vertices, unsigned steps, void *user)
 {
@@ -1195,6 +1259,39 @@ static float *hairobb__convert_curves(hairobb_basis basis, const float *vertices
     for (i = 0; i < segment_count; ++i) curve_indices[i] = (uint32_t)(4 * i);
     memcpy(curve_indices + segment_count, indices, segment_count * sizeof(uint32_t));
     return curves;
+}
+
+/* The hair a BVH traces, as hairobb_build and hairobb_load take it (arrays
+   validated): the caller's arrays, or for other bases with bezier_copy not
+   OFF (static hair) their Bezier copy; moving hair keeps the steps'
+   pointers. 0: out of memory (hairobb_free frees what was taken). */
+static int hairobb__take_hair(hairobb_bvh *bvh, const hairobb_build_options *opt, const float *vertices,
+                              size_t vertex_count, const uint32_t *indices, size_t segment_count, unsigned steps)
+{
+    bvh->vertices = vertices;
+    bvh->indices = indices;
+    bvh->source_indices = indices;
+    bvh->vertex_count = vertex_count;
+    bvh->segment_count = segment_count;
+    bvh->basis = opt->basis;
+    if (steps) {
+        bvh->time_vertices = hairobb__copy_steps(opt->time_vertices, steps, bvh->allocator_user);
+        if (!bvh->time_vertices) return 0;
+        bvh->time_steps = steps;
+    }
+    if (opt->basis != HAIROBB_BASIS_BEZIER && opt->bezier_copy != HAIROBB_OFF && !steps) {
+        float *curves = hairobb__convert_curves(opt->basis, vertices, indices, opt->tangents, segment_count, bvh->allocator_user);
+        if (!curves) return 0;
+        bvh->curves = curves;
+        bvh->vertices = curves;
+        bvh->indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, curves + 16 * segment_count));
+        bvh->source_indices = bvh->indices + segment_count;
+    } else {
+        bvh->point_basis = opt->basis;
+        bvh->tangents = opt->tangents;
+    }
+    bvh->points_in_place = bvh->point_basis == HAIROBB_BASIS_BEZIER && !steps;
+    return 1;
 }
 
 /* The bin (of HAIROBB__BINS) of coordinate x for binning from origin. */
@@ -3999,17 +4096,141 @@ static size_t hairobb__leaf_bytes(const hairobb_bvh *bvh)
     return (sizeof(uint32_t) + (bvh->leaf_ranges ? 2 * sizeof(float) : 0)) * bvh->leaf_prim_count;
 }
 
+/* The settings a BVH traces with, as hairobb_build and hairobb_load fill
+   them in: the tree's, and the options given for tracing and refitting
+   (a refit runs on the build's, or the load's, threads). */
+static void hairobb__set_settings(hairobb_bvh *bvh, const hairobb_build_options *opt, hairobb_simd simd,
+                                  const hairobb__tree_settings *tree)
+{
+    bvh->precision = tree->precision;
+    bvh->policy = tree->policy;
+    bvh->obb_layout = tree->obb_layout;
+    bvh->max_leaf_size = tree->max_leaf_size;
+    hairobb__setup_pieces(bvh, (int)tree->pieces);
+    bvh->simd = simd;
+    bvh->hit_filter = opt->hit_filter;
+    bvh->hit_filter_user = opt->hit_filter_user;
+    bvh->threads = opt->threads;
+    bvh->parallel_for = opt->parallel_for;
+    bvh->parallel_for_user = opt->parallel_for_user;
+}
+
+/* The tree's counts (a build's, or a load's walk), with its bytes. */
+static void hairobb__set_stats(hairobb_bvh *bvh, const hairobb_stats *stats)
+{
+    bvh->stats = *stats;
+    bvh->stats.node_bytes = bvh->node_bytes;
+    bvh->stats.leaf_bytes = hairobb__leaf_bytes(bvh);
+}
+
 static double hairobb__sah_cost(const hairobb_bvh *bvh);
+
+/* The builder's settings from resolved options, and the memory it holds
+   throughout: 28 bytes a position (36 with spatial splits) and the frame
+   boxes of the top's ranges (a task has its own). 0: out of memory (what
+   was allocated is freed by hairobb__builder_free). */
+static int hairobb__builder_start(hairobb__builder *b, const hairobb_build_options *opt, size_t segment_count,
+                                  size_t extra, unsigned steps)
+{
+    size_t halvings = 0, size;
+    b->time_steps = steps;
+    b->time_vertices = opt->time_vertices;
+    b->sah_mid_time = steps && (opt->obb_layout == HAIROBB_OBB_COMPRESSED || opt->obb_layout == HAIROBB_OBB_COMPRESSED_PER_CHILD);
+    b->user = opt->allocator_user;
+    b->policy = opt->nodes;
+    b->obb_layout = opt->obb_layout;
+    b->max_leaf = opt->max_leaf_size;
+    b->candidates = opt->hair_space_candidates;
+    b->progress = opt->progress;
+    b->progress_user = opt->progress_user;
+    b->capacity = segment_count + extra;
+    /* the top of the tree here, subtrees of at most task_limit references as
+       tasks; the limit depends on the input alone (same tree on any thread count) */
+    b->task_limit = hairobb__task_limit(segment_count);
+    /* each reference is binned about once per halving from the root to task_limit */
+    for (size = b->capacity; size > b->task_limit; size /= 2) ++halvings;
+    b->top_work = b->capacity * halvings;
+    b->frame_capacity = hairobb__frame_capacity(b, b->capacity);
+    b->ids = HAIROBB__CAST(uint32_t *, hairobb__malloc_large(sizeof(uint32_t) * b->capacity, b->user));
+    if (opt->spatial_splits == HAIROBB_ON)
+        b->ranges = HAIROBB__CAST(float *, hairobb__malloc_large(2 * sizeof(float) * b->capacity, b->user));
+    b->world_boxes = HAIROBB__CAST(float *, hairobb__malloc_large(6 * sizeof(float) * b->capacity, b->user));
+    if (b->frame_capacity)
+        b->frame_boxes = HAIROBB__CAST(float *, hairobb__malloc_large(6 * sizeof(float) * b->frame_capacity, b->user));
+    return b->ids && (opt->spatial_splits != HAIROBB_ON || b->ranges) && b->world_boxes && (!b->frame_capacity || b->frame_boxes);
+}
+
+/* Everything a builder still holds (after a failure, or its last pass). */
+static void hairobb__builder_free(hairobb__builder *b)
+{
+    if (b->node_allocation) HAIROBB_FREE(b->node_allocation, b->user);
+    if (b->ids) HAIROBB_FREE(b->ids, b->user);
+    if (b->ranges) HAIROBB_FREE(b->ranges, b->user);
+    if (b->world_boxes) HAIROBB_FREE(b->world_boxes, b->user);
+    if (b->frame_boxes) HAIROBB_FREE(b->frame_boxes, b->user);
+    hairobb__free_tasks(b);
+    b->node_allocation = NULL;
+    b->ids = NULL;
+    b->ranges = b->world_boxes = b->frame_boxes = NULL;
+}
+
+/* The tree over the builder's segments: the first pass, the top on the
+   calling thread with the tasks on threads, the gather of their nodes into
+   the BVH's block. The first failure is left in b->error. */
+static void hairobb__build_tree(hairobb__builder *b, hairobb_bvh *bvh, const hairobb_build_options *opt, size_t segment_count)
+{
+    hairobb__pool pool;
+    hairobb__range root;
+    hairobb__tries tries;
+    if (!hairobb__world_boxes(b, segment_count, opt->threads, opt->parallel_for, opt->parallel_for_user, bvh->lower, bvh->upper)) {
+        b->error = HAIROBB_ERROR_INVALID_ARGUMENT;
+        return;
+    }
+    root.begin = 0; root.end = segment_count; root.cap = b->capacity;
+    memset(&tries, 0, sizeof tries);
+    tries.enabled = HAIROBB__TRY_HAIR_SPACE | (opt->spatial_splits == HAIROBB_ON ? HAIROBB__TRY_SPATIAL : 0u) |
+                    (opt->clustering == HAIROBB_ON ? HAIROBB__TRY_CLUSTER : 0u);
+    hairobb__start_build_pool(b, &pool, segment_count, opt->threads, opt->parallel_for);
+    bvh->root = hairobb__build_range(b, &root, 0, tries, NULL);
+    if (b->frame_boxes) HAIROBB_FREE(b->frame_boxes, b->user);
+    b->frame_boxes = NULL;
+    hairobb__run_tasks(b, &pool, opt->threads, opt->parallel_for, opt->parallel_for_user);
+    /* from here on only ids, for the leaves, and the u ranges of spatial
+       splits, which the leaves keep for hairobb_refit */
+    HAIROBB_FREE(b->world_boxes, b->user);
+    b->world_boxes = NULL;
+    if (b->error == HAIROBB_OK) hairobb__gather_tasks(b, bvh, opt->threads, opt->parallel_for, opt->parallel_for_user);
+    if (b->error == HAIROBB_OK && b->progress && b->progress(b->progress_user, 1.0f)) b->error = HAIROBB_ERROR_CANCELLED;
+}
+
+/* The leaves' arrays, filled by the last pass: exactly what tracing needs
+   (memory_bytes reports what stays). */
+static hairobb_result hairobb__build_leaves(hairobb__builder *b, hairobb_bvh *bvh, const hairobb_build_options *opt,
+                                            size_t segment_count)
+{
+    bvh->leaf_prims = HAIROBB__CAST(uint32_t *, hairobb__malloc_large(sizeof(uint32_t) * b->stats.leaf_references, b->user));
+    if (!bvh->leaf_prims) return HAIROBB_ERROR_OUT_OF_MEMORY;
+    if (opt->spatial_splits == HAIROBB_ON) {
+        /* hairobb_refit bounds the clipped parts again: their u ranges stay, unless none was clipped */
+        bvh->leaf_ranges = HAIROBB__CAST(float *, hairobb__malloc_large(2 * sizeof(float) * b->stats.leaf_references, b->user));
+        if (!bvh->leaf_ranges) return HAIROBB_ERROR_OUT_OF_MEMORY;
+    }
+    if (!hairobb__finish_build(b, bvh, opt->threads, opt->parallel_for, opt->parallel_for_user)) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    if (bvh->leaf_ranges && bvh->leaf_prim_count == segment_count) {
+        /* every segment once: none was clipped */
+        HAIROBB_FREE(bvh->leaf_ranges, b->user);
+        bvh->leaf_ranges = NULL;
+    }
+    return HAIROBB_OK;
+}
 
 HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_count,
                              const uint32_t *indices, size_t segment_count,
                              const hairobb_build_options *options, hairobb_bvh **out)
 {
     hairobb_build_options opt;
+    hairobb__tree_settings tree;
     hairobb__builder b;
-    hairobb__pool pool;
-    hairobb__range root;
-    hairobb__tries tries;
     hairobb_bvh *bvh;
     hairobb_result result;
     hairobb_simd simd;
@@ -4017,180 +4238,49 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     unsigned steps;
 
     if (out) *out = NULL;
-    if (options) opt = *options; else memset(&opt, 0, sizeof opt);
+    result = hairobb__resolve_options(options, HAIROBB__FOR_BUILD, &opt);
     if (!out || (!vertices && opt.time_steps < 2) || !indices || segment_count == 0) return HAIROBB_ERROR_INVALID_ARGUMENT;
-    if (opt.max_leaf_size == 0) opt.max_leaf_size = 4;
-    if (opt.hair_space_candidates == 0) opt.hair_space_candidates = 2;
-    if (opt.curve_pieces == 0) opt.curve_pieces = 8;
-    if ((unsigned)opt.nodes > HAIROBB_NODES_OBB_ONLY || (unsigned)opt.precision > HAIROBB_PRECISION_PIECES ||
-        (unsigned)opt.obb_layout > HAIROBB_OBB_COMPRESSED_PER_CHILD ||
-        (unsigned)opt.spatial_splits > HAIROBB_OFF || (unsigned)opt.clustering > HAIROBB_OFF ||
-        !(opt.spatial_split_budget >= 0.0f && opt.spatial_split_budget <= 4.0f) ||
-        opt.max_leaf_size > HAIROBB__MAX_LEAF || opt.hair_space_candidates > HAIROBB__MAX_CANDIDATES ||
-        opt.curve_pieces > HAIROBB__MAX_PIECES || opt.threads > 256 || (unsigned)opt.basis > HAIROBB_BASIS_LINEAR ||
-        (unsigned)opt.simd > HAIROBB_SIMD_AVX2 ||
-        (opt.basis == HAIROBB_BASIS_HERMITE) != (opt.tangents != NULL))
-        return HAIROBB_ERROR_INVALID_ARGUMENT;
-    /* the defaults the bench chose (see README, "Ablation") */
-    if (opt.obb_layout == HAIROBB_OBB_DEFAULT) opt.obb_layout = HAIROBB_OBB_COMPRESSED_PER_CHILD;
-    if (opt.spatial_splits == HAIROBB_AUTO) opt.spatial_splits = HAIROBB_OFF;
-    if (opt.clustering == HAIROBB_AUTO) opt.clustering = HAIROBB_OFF;
-    if (opt.spatial_split_budget == 0.0f) opt.spatial_split_budget = 0.25f;
-    result = hairobb__choose_simd(opt.simd, &simd);
+    if (result == HAIROBB_OK) result = hairobb__choose_simd(opt.simd, &simd);
+    if (result == HAIROBB_OK) result = hairobb__validate_hair(&opt, &vertices, vertex_count, indices, segment_count, &steps);
     if (result != HAIROBB_OK) return result;
-    if (opt.time_steps < 2) {
-        result = hairobb__validate(vertices, vertex_count, indices, segment_count, hairobb__basis_points(opt.basis), opt.tangents);
-        if (result != HAIROBB_OK) return result;
-    }
-    result = hairobb__validate_motion(&opt, vertex_count, indices, segment_count, &vertices, &steps);
-    if (result != HAIROBB_OK) return result;
-
     extra = opt.spatial_splits == HAIROBB_ON ? (size_t)((double)segment_count * opt.spatial_split_budget) : 0;
     if (segment_count > (size_t)-1 / 2 - extra || segment_count > (size_t)-1 / (16 * sizeof(float) + 2 * sizeof(uint32_t)) ||
         segment_count + extra > (size_t)-1 / (6 * sizeof(float)) || segment_count + extra > 0xffffffffu)
         return HAIROBB_ERROR_TOO_LARGE;
+
     memset(&b, 0, sizeof b);
-    b.vertices = vertices;
-    b.indices = indices;
-    b.time_steps = steps;
-    b.time_vertices = opt.time_vertices;
-    b.sah_mid_time = steps && (opt.obb_layout == HAIROBB_OBB_COMPRESSED || opt.obb_layout == HAIROBB_OBB_COMPRESSED_PER_CHILD);
-    b.user = opt.allocator_user;
-    b.policy = opt.nodes;
-    b.obb_layout = opt.obb_layout;
-    b.max_leaf = opt.max_leaf_size;
-    b.candidates = opt.hair_space_candidates;
-    b.progress = opt.progress;
-    b.progress_user = opt.progress_user;
-    b.capacity = segment_count + extra;
-    /* the top of the tree here, subtrees of at most task_limit references as
-       tasks; the limit depends on the input alone (same tree on any thread count) */
-    b.task_limit = hairobb__task_limit(segment_count);
-    {
-        /* each reference is binned about once per halving from the root to task_limit */
-        size_t halvings = 0, size;
-        for (size = b.capacity; size > b.task_limit; size /= 2) ++halvings;
-        b.top_work = b.capacity * halvings;
-    }
-    /* the memory the build holds throughout: 28 bytes a position (36 with
-       spatial splits), the frame boxes of the top's ranges (a task has its own) */
-    b.frame_capacity = hairobb__frame_capacity(&b, b.capacity);
-    bvh = HAIROBB__CAST(hairobb_bvh *, HAIROBB_MALLOC(sizeof *bvh, b.user));
+    bvh = HAIROBB__CAST(hairobb_bvh *, HAIROBB_MALLOC(sizeof *bvh, opt.allocator_user));
     if (bvh) memset(bvh, 0, sizeof *bvh);     /* the failure path reads it */
-    b.ids = HAIROBB__CAST(uint32_t *, hairobb__malloc_large(sizeof(uint32_t) * b.capacity, b.user));
-    if (opt.spatial_splits == HAIROBB_ON)
-        b.ranges = HAIROBB__CAST(float *, hairobb__malloc_large(2 * sizeof(float) * b.capacity, b.user));
-    b.world_boxes = HAIROBB__CAST(float *, hairobb__malloc_large(6 * sizeof(float) * b.capacity, b.user));
-    if (b.frame_capacity)
-        b.frame_boxes = HAIROBB__CAST(float *, hairobb__malloc_large(6 * sizeof(float) * b.frame_capacity, b.user));
     b.error = HAIROBB_ERROR_OUT_OF_MEMORY;
-    if (!bvh || !b.ids || (opt.spatial_splits == HAIROBB_ON && !b.ranges) || !b.world_boxes ||
-        (b.frame_capacity && !b.frame_boxes))
-        goto failed;
-    if (steps) {
-        bvh->time_vertices = hairobb__copy_steps(opt.time_vertices, steps, b.user);
-        if (!bvh->time_vertices) goto failed;
-    }
-    bvh->vertex_count = vertex_count;
-    bvh->source_indices = indices;
-    if (opt.basis != HAIROBB_BASIS_BEZIER && opt.bezier_copy != HAIROBB_OFF && !steps) {
-        float *curves = hairobb__convert_curves(opt.basis, vertices, indices, opt.tangents, segment_count, b.user);
-        if (!curves) goto failed;
-        bvh->curves = curves;
-        b.vertices = vertices = curves;
-        b.indices = indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, curves + 16 * segment_count));
-        bvh->source_indices = indices + segment_count;
-    } else {
-        b.basis = opt.basis;
-        b.tangents = opt.tangents;
-    }
-    b.error = HAIROBB_OK;
-
-    if (!hairobb__world_boxes(&b, segment_count, opt.threads, opt.parallel_for, opt.parallel_for_user, bvh->lower, bvh->upper)) {
-        b.error = HAIROBB_ERROR_INVALID_ARGUMENT;
-        goto failed;
-    }
-    root.begin = 0; root.end = segment_count; root.cap = b.capacity;
-    memset(&tries, 0, sizeof tries);
-    tries.enabled = HAIROBB__TRY_HAIR_SPACE | (opt.spatial_splits == HAIROBB_ON ? HAIROBB__TRY_SPATIAL : 0u) |
-                    (opt.clustering == HAIROBB_ON ? HAIROBB__TRY_CLUSTER : 0u);
-    hairobb__start_build_pool(&b, &pool, segment_count, opt.threads, opt.parallel_for);
-    bvh->root = hairobb__build_range(&b, &root, 0, tries, NULL);
-    if (b.frame_boxes) HAIROBB_FREE(b.frame_boxes, b.user);
-    b.frame_boxes = NULL;
-    hairobb__run_tasks(&b, &pool, opt.threads, opt.parallel_for, opt.parallel_for_user);
-    /* from here on only ids, for the leaves, and the u ranges of spatial
-       splits, which the leaves keep for hairobb_refit */
-    HAIROBB_FREE(b.world_boxes, b.user);
-    b.world_boxes = NULL;
-    if (b.error == HAIROBB_OK) hairobb__gather_tasks(&b, bvh, opt.threads, opt.parallel_for, opt.parallel_for_user);
-    if (b.error != HAIROBB_OK) goto failed;
-    if (b.progress && b.progress(b.progress_user, 1.0f)) { b.error = HAIROBB_ERROR_CANCELLED; goto failed; }
-
-    /* keep exactly what tracing needs: memory_bytes reports what stays */
-    b.error = HAIROBB_ERROR_OUT_OF_MEMORY;
-    bvh->leaf_prims = HAIROBB__CAST(uint32_t *, hairobb__malloc_large(sizeof(uint32_t) * b.stats.leaf_references, b.user));
-    if (!bvh->leaf_prims) goto failed;
-    if (opt.spatial_splits == HAIROBB_ON) {
-        /* hairobb_refit bounds the clipped parts again: their u ranges stay, unless none was clipped */
-        bvh->leaf_ranges = HAIROBB__CAST(float *, hairobb__malloc_large(2 * sizeof(float) * b.stats.leaf_references, b.user));
-        if (!bvh->leaf_ranges) goto failed;
-    }
-    if (!hairobb__finish_build(&b, bvh, opt.threads, opt.parallel_for, opt.parallel_for_user)) {
-        b.error = HAIROBB_ERROR_INVALID_ARGUMENT;
-        goto failed;
-    }
-    if (b.ranges) HAIROBB_FREE(b.ranges, b.user);
-    b.ranges = NULL;
-    if (bvh->leaf_ranges && bvh->leaf_prim_count == segment_count) {
-        /* every segment once: none was clipped */
-        HAIROBB_FREE(bvh->leaf_ranges, b.user);
-        bvh->leaf_ranges = NULL;
-    }
-    hairobb__free_tasks(&b);
-    HAIROBB_FREE(b.ids, b.user);
-    hairobb__pad_box(bvh->lower, bvh->upper);
-    bvh->vertices = vertices;
-    bvh->indices = indices;
-    bvh->segment_count = segment_count;
-    bvh->vertex_count = vertex_count;
-    bvh->basis = opt.basis;
-    bvh->point_basis = b.basis;
-    bvh->tangents = b.tangents;
-    bvh->threads = opt.threads;
-    bvh->parallel_for = opt.parallel_for;
-    bvh->parallel_for_user = opt.parallel_for_user;
-    bvh->hit_filter = opt.hit_filter;
-    bvh->hit_filter_user = opt.hit_filter_user;
+    if (!hairobb__builder_start(&b, &opt, segment_count, extra, steps) || !bvh) goto failed;
     bvh->allocator_user = b.user;
-    bvh->precision = opt.precision;
-    bvh->policy = opt.nodes;
-    bvh->obb_layout = opt.obb_layout;
-    bvh->max_leaf_size = opt.max_leaf_size;
-    bvh->simd = simd;
-    bvh->time_steps = steps;
-    bvh->points_in_place = bvh->point_basis == HAIROBB_BASIS_BEZIER && !steps;
-    hairobb__setup_pieces(bvh, (int)opt.curve_pieces);
-    bvh->stats = b.stats;
-    bvh->stats.node_bytes = bvh->node_bytes;
-    bvh->stats.leaf_bytes = hairobb__leaf_bytes(bvh);
+    if (!hairobb__take_hair(bvh, &opt, vertices, vertex_count, indices, segment_count, steps)) goto failed;
+    /* the builder reads the points as tracing will: the copy, or the caller's */
+    b.vertices = bvh->vertices;
+    b.indices = bvh->indices;
+    b.basis = bvh->point_basis;
+    b.tangents = bvh->tangents;
+    b.error = HAIROBB_OK;
+    hairobb__build_tree(&b, bvh, &opt, segment_count);
+    if (b.error == HAIROBB_OK) b.error = hairobb__build_leaves(&b, bvh, &opt, segment_count);
+    if (b.error != HAIROBB_OK) goto failed;
+    hairobb__builder_free(&b);
+    hairobb__pad_box(bvh->lower, bvh->upper);
+    tree.precision = opt.precision;
+    tree.policy = opt.nodes;
+    tree.obb_layout = opt.obb_layout;
+    tree.max_leaf_size = opt.max_leaf_size;
+    tree.pieces = opt.curve_pieces;
+    hairobb__set_settings(bvh, &opt, simd, &tree);
+    hairobb__set_stats(bvh, &b.stats);
     *out = bvh;
     return HAIROBB_OK;
 
 failed:
-    if (bvh && bvh->curves) HAIROBB_FREE(bvh->curves, b.user);
-    if (bvh && bvh->time_vertices) HAIROBB_FREE(HAIROBB__CAST(void *, bvh->time_vertices), b.user);
-    if (bvh && bvh->node_allocation) HAIROBB_FREE(bvh->node_allocation, b.user);
-    if (b.node_allocation) HAIROBB_FREE(b.node_allocation, b.user);
-    if (b.ids) HAIROBB_FREE(b.ids, b.user);
-    if (b.ranges) HAIROBB_FREE(b.ranges, b.user);
-    if (b.world_boxes) HAIROBB_FREE(b.world_boxes, b.user);
-    if (b.frame_boxes) HAIROBB_FREE(b.frame_boxes, b.user);
-    if (bvh && bvh->leaf_prims) HAIROBB_FREE(bvh->leaf_prims, b.user);
-    if (bvh && bvh->leaf_ranges) HAIROBB_FREE(bvh->leaf_ranges, b.user);
-    hairobb__free_tasks(&b);
-    if (bvh) HAIROBB_FREE(bvh, b.user);
-    return b.error;
+    result = b.error;
+    hairobb__builder_free(&b);
+    hairobb_free(bvh);
+    return result;
 }
 
 HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh)
@@ -4864,64 +4954,54 @@ static unsigned hairobb__layout_types(hairobb_obb_layout layout, hairobb_node_po
     return types;
 }
 
-HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
-                                        const float *vertices, size_t vertex_count,
-                                        const uint32_t *indices, size_t segment_count,
-                                        const hairobb_build_options *options, hairobb_bvh **out)
+/* What a saved BVH's header says. */
+typedef struct hairobb__saved {
+    uint64_t node_bytes, leaf_prim_count, segments;
+    size_t leaf_bytes, range_bytes;
+    uint32_t basis, steps;
+    hairobb__tree_settings tree;      /* set once the header's words are in range */
+} hairobb__saved;
+
+/* The header of the size bytes at in: UNSUPPORTED where this build cannot
+   read it; INVALID_FILE unless its sizes add up to size, the checksum
+   matches, the settings are in range, the padding is zero and the bounds
+   are finite. */
+static hairobb_result hairobb__read_saved(const unsigned char *in, size_t size, hairobb__saved *saved)
 {
-    const unsigned char *in = HAIROBB__CAST(const unsigned char *, buffer);
-    hairobb_build_options opt;
-    hairobb__tree_check check;
-    hairobb_result result;
-    hairobb_simd simd;
-    hairobb_bvh *bvh;
-    uint64_t node_bytes, leaf_prim_count, saved_segments;
-    uint32_t basis, precision, pieces, layout, max_leaf, policy, flags, saved_steps;
-    size_t leaf_bytes, range_bytes, i;
-    unsigned steps;
-    void *user;
+    uint32_t flags, precision, pieces, layout, max_leaf, policy;
+    size_t i;
     int k;
-
-    if (out) *out = NULL;
-    if (options) opt = *options; else memset(&opt, 0, sizeof opt);
-    if (!out || !in || (!vertices && opt.time_steps < 2) || !indices || segment_count == 0) return HAIROBB_ERROR_INVALID_ARGUMENT;
-    if ((unsigned)opt.basis > HAIROBB_BASIS_LINEAR || (opt.basis == HAIROBB_BASIS_HERMITE) != (opt.tangents != NULL) ||
-        (unsigned)opt.simd > HAIROBB_SIMD_AVX2 || (unsigned)opt.verify_hair > HAIROBB_OFF || opt.threads > 256)
-        return HAIROBB_ERROR_INVALID_ARGUMENT;
-    result = hairobb__choose_simd(opt.simd, &simd);
-    if (result != HAIROBB_OK) return result;
-    user = opt.allocator_user;
-
-    /* the header: what this build can read, then sizes that add up to size, then the checksum */
     if (size < HAIROBB__SAVE_HEADER + 8 || memcmp(in, hairobb__save_magic, sizeof hairobb__save_magic) != 0)
         return HAIROBB_ERROR_INVALID_FILE;
     if (hairobb__get32(in + HAIROBB__AT_VERSION) != HAIROBB__SAVE_VERSION ||
         hairobb__get32(in + HAIROBB__AT_BYTE_ORDER) != HAIROBB__SAVE_BYTE_ORDER || hairobb__get32(in + HAIROBB__AT_WIDTH) != HAIROBB__W)
         return HAIROBB_ERROR_UNSUPPORTED;
-    node_bytes = hairobb__get64(in + HAIROBB__AT_NODE_BYTES);
-    leaf_prim_count = hairobb__get64(in + HAIROBB__AT_LEAF_PRIMS);
-    if (node_bytes > size - HAIROBB__SAVE_HEADER - 8 || leaf_prim_count > (size - HAIROBB__SAVE_HEADER - 8) / sizeof(uint32_t))
+    saved->node_bytes = hairobb__get64(in + HAIROBB__AT_NODE_BYTES);
+    saved->leaf_prim_count = hairobb__get64(in + HAIROBB__AT_LEAF_PRIMS);
+    if (saved->node_bytes > size - HAIROBB__SAVE_HEADER - 8 || saved->leaf_prim_count > (size - HAIROBB__SAVE_HEADER - 8) / sizeof(uint32_t))
         return HAIROBB_ERROR_INVALID_FILE;
-    leaf_bytes = hairobb__saved_leaf_bytes((size_t)leaf_prim_count);
+    saved->leaf_bytes = hairobb__saved_leaf_bytes((size_t)saved->leaf_prim_count);
     flags = hairobb__get32(in + HAIROBB__AT_FLAGS);
-    range_bytes = flags == HAIROBB__SAVE_RANGES ? 2 * sizeof(float) * (size_t)leaf_prim_count : 0;   /* no overflow: below size */
-    if (flags > HAIROBB__SAVE_RANGES || leaf_bytes + range_bytes != size - HAIROBB__SAVE_HEADER - 8 - (size_t)node_bytes ||
+    /* no overflow: below size */
+    saved->range_bytes = flags == HAIROBB__SAVE_RANGES ? 2 * sizeof(float) * (size_t)saved->leaf_prim_count : 0;
+    if (flags > HAIROBB__SAVE_RANGES ||
+        saved->leaf_bytes + saved->range_bytes != size - HAIROBB__SAVE_HEADER - 8 - (size_t)saved->node_bytes ||
         hairobb__get64(in + size - 8) != hairobb__save_checksum(in, size))
         return HAIROBB_ERROR_INVALID_FILE;
-    basis = hairobb__get32(in + HAIROBB__AT_BASIS);
+    saved->basis = hairobb__get32(in + HAIROBB__AT_BASIS);
     precision = hairobb__get32(in + HAIROBB__AT_PRECISION);
     pieces = hairobb__get32(in + HAIROBB__AT_PIECES);
     layout = hairobb__get32(in + HAIROBB__AT_LAYOUT);
     max_leaf = hairobb__get32(in + HAIROBB__AT_MAX_LEAF);
     policy = hairobb__get32(in + HAIROBB__AT_POLICY);
-    saved_segments = hairobb__get64(in + HAIROBB__AT_SEGMENTS);
-    if (basis > HAIROBB_BASIS_LINEAR || precision > HAIROBB_PRECISION_PIECES || pieces < 1 || pieces > HAIROBB__MAX_PIECES ||
+    saved->segments = hairobb__get64(in + HAIROBB__AT_SEGMENTS);
+    if (saved->basis > HAIROBB_BASIS_LINEAR || precision > HAIROBB_PRECISION_PIECES || pieces < 1 || pieces > HAIROBB__MAX_PIECES ||
         layout < HAIROBB_OBB_PER_CHILD || layout > HAIROBB_OBB_COMPRESSED_PER_CHILD || max_leaf < 1 || max_leaf > HAIROBB__MAX_LEAF ||
         policy > HAIROBB_NODES_OBB_ONLY || hairobb__get32(in + 124) != 0 ||
-        saved_segments == 0 || leaf_prim_count == 0 || node_bytes % 16 != 0)
+        saved->segments == 0 || saved->leaf_prim_count == 0 || saved->node_bytes % 16 != 0)
         return HAIROBB_ERROR_INVALID_FILE;
-    for (i = HAIROBB__SAVE_HEADER + (size_t)node_bytes + sizeof(uint32_t) * (size_t)leaf_prim_count;
-         i < HAIROBB__SAVE_HEADER + (size_t)node_bytes + leaf_bytes; ++i)
+    for (i = HAIROBB__SAVE_HEADER + (size_t)saved->node_bytes + sizeof(uint32_t) * (size_t)saved->leaf_prim_count;
+         i < HAIROBB__SAVE_HEADER + (size_t)saved->node_bytes + saved->leaf_bytes; ++i)
         if (in[i] != 0) return HAIROBB_ERROR_INVALID_FILE;
     for (k = 0; k < 3; ++k) {
         float lo, hi;
@@ -4929,119 +5009,123 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
         memcpy(&hi, in + HAIROBB__AT_BOUNDS + 12 + 4 * k, sizeof hi);
         if (!(lo <= hi) || !(fabsf(lo) <= FLT_MAX) || !(fabsf(hi) <= FLT_MAX)) return HAIROBB_ERROR_INVALID_FILE;
     }
-    saved_steps = hairobb__get32(in + HAIROBB__AT_TIME_STEPS);
-    if (saved_steps == 1 || saved_steps > 0xffffu || (saved_steps && basis == HAIROBB_BASIS_HERMITE)) return HAIROBB_ERROR_INVALID_FILE;
-    if (basis != (uint32_t)opt.basis || saved_segments != (uint64_t)segment_count ||
-        saved_steps != (opt.time_steps < 2 ? 0u : opt.time_steps))
-        return HAIROBB_ERROR_MISMATCH;
-    if (opt.time_steps < 2) {
-        result = hairobb__validate(vertices, vertex_count, indices, segment_count, hairobb__basis_points(opt.basis), opt.tangents);
-        if (result != HAIROBB_OK) return result;
+    saved->steps = hairobb__get32(in + HAIROBB__AT_TIME_STEPS);
+    if (saved->steps == 1 || saved->steps > 0xffffu || (saved->steps && saved->basis == HAIROBB_BASIS_HERMITE))
+        return HAIROBB_ERROR_INVALID_FILE;
+    saved->tree.precision = (hairobb_precision)precision;
+    saved->tree.policy = (hairobb_node_policy)policy;
+    saved->tree.obb_layout = (hairobb_obb_layout)layout;
+    saved->tree.max_leaf_size = max_leaf;
+    saved->tree.pieces = pieces;
+    return HAIROBB_OK;
+}
+
+/* The saved tree into the BVH: node memory, the leaves' ids (each below
+   segment_count) and u ranges (inside [0, 1]), then the walk of the whole
+   tree (hairobb__check_tree), which counts its nodes into *stats.
+   OUT_OF_MEMORY or INVALID_FILE; what was allocated is the BVH's. */
+static hairobb_result hairobb__load_tree(hairobb_bvh *bvh, const unsigned char *in, const hairobb__saved *saved,
+                                         size_t segment_count, hairobb_stats *stats)
+{
+    void *user = bvh->allocator_user;
+    hairobb__tree_check check;
+    hairobb_result result = HAIROBB_ERROR_OUT_OF_MEMORY;
+    size_t i;
+    memset(&check, 0, sizeof check);
+    if (saved->node_bytes) {
+        unsigned char *allocation = HAIROBB__CAST(unsigned char *, hairobb__malloc_large((size_t)saved->node_bytes + 64, user));
+        if (!allocation) goto done;
+        bvh->node_allocation = allocation;
+        bvh->nodes = hairobb__align64(allocation);
+        bvh->node_bytes = (size_t)saved->node_bytes;
+        memcpy(bvh->nodes, in + HAIROBB__SAVE_HEADER, bvh->node_bytes);
+        check.reached = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(bvh->node_bytes / 128 + 1, user));
+        if (!check.reached) goto done;
+        memset(check.reached, 0, bvh->node_bytes / 128 + 1);
     }
-    result = hairobb__validate_motion(&opt, vertex_count, indices, segment_count, &vertices, &steps);
+    bvh->leaf_prims = HAIROBB__CAST(uint32_t *, hairobb__malloc_large(sizeof(uint32_t) * (size_t)saved->leaf_prim_count, user));
+    if (!bvh->leaf_prims) goto done;
+    bvh->leaf_prim_count = (size_t)saved->leaf_prim_count;
+    memcpy(bvh->leaf_prims, in + HAIROBB__SAVE_HEADER + bvh->node_bytes, sizeof(uint32_t) * bvh->leaf_prim_count);
+    bvh->root = hairobb__get64(in + HAIROBB__AT_ROOT);
+    if (saved->range_bytes) {
+        /* u ranges inside [0, 1] (hairobb_refit clips the segments to them) */
+        bvh->leaf_ranges = HAIROBB__CAST(float *, hairobb__malloc_large(saved->range_bytes, user));
+        if (!bvh->leaf_ranges) goto done;
+        memcpy(bvh->leaf_ranges, in + HAIROBB__SAVE_HEADER + bvh->node_bytes + saved->leaf_bytes, saved->range_bytes);
+    }
+    result = HAIROBB_ERROR_INVALID_FILE;
+    for (i = 0; i < bvh->leaf_prim_count; ++i) {
+        if (bvh->leaf_prims[i] >= segment_count) goto done;
+        if (bvh->leaf_ranges && !(bvh->leaf_ranges[2 * i] >= 0.0f && bvh->leaf_ranges[2 * i] <= bvh->leaf_ranges[2 * i + 1] &&
+                                  bvh->leaf_ranges[2 * i + 1] <= 1.0f))
+            goto done;
+    }
+    check.nodes = bvh->nodes;
+    check.node_bytes = bvh->node_bytes;
+    check.leaf_prim_count = bvh->leaf_prim_count;
+    check.inner_types = hairobb__layout_types(saved->tree.obb_layout, saved->tree.policy, saved->steps != 0);
+    check.max_leaf = saved->tree.max_leaf_size;
+    if (hairobb__check_tree(&check, bvh->root, 0) && check.next_leaf == check.leaf_prim_count &&
+        check.reached_bytes == check.node_bytes) {
+        *stats = check.stats;
+        result = HAIROBB_OK;
+    }
+done:
+    if (check.reached) HAIROBB_FREE(check.reached, user);
+    return result;
+}
+
+HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
+                                        const float *vertices, size_t vertex_count,
+                                        const uint32_t *indices, size_t segment_count,
+                                        const hairobb_build_options *options, hairobb_bvh **out)
+{
+    const unsigned char *in = HAIROBB__CAST(const unsigned char *, buffer);
+    hairobb_build_options opt;
+    hairobb__saved saved;
+    hairobb_stats stats;
+    hairobb_result result;
+    hairobb_simd simd;
+    hairobb_bvh *bvh;
+    unsigned steps;
+    int k;
+
+    if (out) *out = NULL;
+    result = hairobb__resolve_options(options, HAIROBB__FOR_LOAD, &opt);
+    if (!out || !in || (!vertices && opt.time_steps < 2) || !indices || segment_count == 0) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    if (result == HAIROBB_OK) result = hairobb__choose_simd(opt.simd, &simd);
+    if (result == HAIROBB_OK) result = hairobb__read_saved(in, size, &saved);
+    if (result == HAIROBB_OK && (saved.basis != (uint32_t)opt.basis || saved.segments != (uint64_t)segment_count ||
+                                 saved.steps != (opt.time_steps < 2 ? 0u : opt.time_steps)))
+        result = HAIROBB_ERROR_MISMATCH;
+    if (result == HAIROBB_OK) result = hairobb__validate_hair(&opt, &vertices, vertex_count, indices, segment_count, &steps);
     if (result != HAIROBB_OK) return result;
 
-    bvh = HAIROBB__CAST(hairobb_bvh *, HAIROBB_MALLOC(sizeof *bvh, user));
+    bvh = HAIROBB__CAST(hairobb_bvh *, HAIROBB_MALLOC(sizeof *bvh, opt.allocator_user));
     if (!bvh) return HAIROBB_ERROR_OUT_OF_MEMORY;
     memset(bvh, 0, sizeof *bvh);
-    bvh->allocator_user = user;
-    bvh->vertices = vertices;
-    bvh->indices = indices;
-    bvh->vertex_count = vertex_count;
-    memset(&check, 0, sizeof check);
+    bvh->allocator_user = opt.allocator_user;
     result = HAIROBB_ERROR_OUT_OF_MEMORY;
-    bvh->source_indices = indices;
-    bvh->basis = opt.basis;
-    if (steps) {
-        bvh->time_vertices = hairobb__copy_steps(opt.time_vertices, steps, user);
-        if (!bvh->time_vertices) goto failed;
-        bvh->time_steps = steps;
-    }
-    if (opt.basis != HAIROBB_BASIS_BEZIER && opt.bezier_copy != HAIROBB_OFF && !steps) {
-        float *curves = hairobb__convert_curves(opt.basis, vertices, indices, opt.tangents, segment_count, user);
-        if (!curves) goto failed;
-        bvh->curves = curves;
-        bvh->vertices = curves;
-        bvh->indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, curves + 16 * segment_count));
-        bvh->source_indices = bvh->indices + segment_count;
-    } else {
-        bvh->point_basis = opt.basis;
-        bvh->tangents = opt.tangents;
-    }
-    bvh->points_in_place = bvh->point_basis == HAIROBB_BASIS_BEZIER && !bvh->time_steps;
-    bvh->segment_count = segment_count;
+    if (!hairobb__take_hair(bvh, &opt, vertices, vertex_count, indices, segment_count, steps)) goto failed;
     if (opt.verify_hair != HAIROBB_OFF &&
         (hairobb__get64(in + HAIROBB__AT_VERTICES) != (uint64_t)hairobb__traced_vertex_count(bvh) ||
          hairobb__get64(in + HAIROBB__AT_HAIR_HASH) != hairobb__traced_hash(bvh))) {
         result = HAIROBB_ERROR_MISMATCH;
         goto failed;
     }
-    if (node_bytes) {
-        unsigned char *allocation = HAIROBB__CAST(unsigned char *, hairobb__malloc_large((size_t)node_bytes + 64, user));
-        if (!allocation) goto failed;
-        bvh->node_allocation = allocation;
-        bvh->nodes = hairobb__align64(allocation);
-        bvh->node_bytes = (size_t)node_bytes;
-        memcpy(bvh->nodes, in + HAIROBB__SAVE_HEADER, bvh->node_bytes);
-        check.reached = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(bvh->node_bytes / 128 + 1, user));
-        if (!check.reached) goto failed;
-        memset(check.reached, 0, bvh->node_bytes / 128 + 1);
-    }
-    bvh->leaf_prims = HAIROBB__CAST(uint32_t *, hairobb__malloc_large(sizeof(uint32_t) * (size_t)leaf_prim_count, user));
-    if (!bvh->leaf_prims) goto failed;
-    bvh->leaf_prim_count = (size_t)leaf_prim_count;
-    memcpy(bvh->leaf_prims, in + HAIROBB__SAVE_HEADER + bvh->node_bytes, sizeof(uint32_t) * bvh->leaf_prim_count);
-    bvh->root = hairobb__get64(in + HAIROBB__AT_ROOT);
-
-    if (range_bytes) {
-        /* u ranges inside [0, 1] (hairobb_refit clips the segments to them) */
-        bvh->leaf_ranges = HAIROBB__CAST(float *, hairobb__malloc_large(range_bytes, user));
-        if (!bvh->leaf_ranges) goto failed;
-        memcpy(bvh->leaf_ranges, in + HAIROBB__SAVE_HEADER + bvh->node_bytes + leaf_bytes, range_bytes);
-    }
-    result = HAIROBB_ERROR_INVALID_FILE;
-    for (i = 0; i < bvh->leaf_prim_count; ++i) {
-        if (bvh->leaf_prims[i] >= segment_count) goto failed;
-        if (bvh->leaf_ranges && !(bvh->leaf_ranges[2 * i] >= 0.0f && bvh->leaf_ranges[2 * i] <= bvh->leaf_ranges[2 * i + 1] &&
-                                  bvh->leaf_ranges[2 * i + 1] <= 1.0f))
-            goto failed;
-    }
-    check.nodes = bvh->nodes;
-    check.node_bytes = bvh->node_bytes;
-    check.leaf_prim_count = bvh->leaf_prim_count;
-    check.inner_types = hairobb__layout_types((hairobb_obb_layout)layout, (hairobb_node_policy)policy, saved_steps != 0);
-    check.max_leaf = max_leaf;
-    if (!hairobb__check_tree(&check, bvh->root, 0) || check.next_leaf != check.leaf_prim_count ||
-        check.reached_bytes != check.node_bytes)
-        goto failed;
-    if (check.reached) HAIROBB_FREE(check.reached, user);
-
+    result = hairobb__load_tree(bvh, in, &saved, segment_count, &stats);
+    if (result != HAIROBB_OK) goto failed;
     for (k = 0; k < 3; ++k) {
         memcpy(&bvh->lower[k], in + HAIROBB__AT_BOUNDS + 4 * k, sizeof(float));
         memcpy(&bvh->upper[k], in + HAIROBB__AT_BOUNDS + 12 + 4 * k, sizeof(float));
     }
-    bvh->segment_count = segment_count;
-    bvh->hit_filter = opt.hit_filter;
-    bvh->hit_filter_user = opt.hit_filter_user;
-    bvh->precision = (hairobb_precision)precision;
-    bvh->basis = opt.basis;
-    bvh->policy = (hairobb_node_policy)policy;
-    bvh->obb_layout = (hairobb_obb_layout)layout;
-    bvh->max_leaf_size = max_leaf;
-    bvh->simd = simd;
-    /* hairobb_refit of a loaded BVH runs on the load's threads */
-    bvh->threads = opt.threads;
-    bvh->parallel_for = opt.parallel_for;
-    bvh->parallel_for_user = opt.parallel_for_user;
-    hairobb__setup_pieces(bvh, (int)pieces);
-    bvh->stats = check.stats;
-    bvh->stats.node_bytes = bvh->node_bytes;
-    bvh->stats.leaf_bytes = hairobb__leaf_bytes(bvh);
+    hairobb__set_settings(bvh, &opt, simd, &saved.tree);
+    hairobb__set_stats(bvh, &stats);
     *out = bvh;
     return HAIROBB_OK;
 
 failed:
-    if (check.reached) HAIROBB_FREE(check.reached, user);
     hairobb_free(bvh);
     return result;
 }
