@@ -360,6 +360,9 @@
 */
 #ifndef HAIROBB_H
 #define HAIROBB_H
+/* ------------------------------------------------------------------------ */
+/* >>api  The API: types and functions (the manual above)                   */
+/* ------------------------------------------------------------------------ */
 
 #include <stddef.h>
 #include <stdint.h>
@@ -652,7 +655,7 @@ HAIROBB_DEF void hairobb_hair_free(hairobb_hair *hair);
 #endif /* HAIROBB_H */
 
 /* ======================================================================== */
-/*                              IMPLEMENTATION                              */
+/* >>implementation                                                         */
 /* ======================================================================== */
 #ifdef HAIROBB_IMPLEMENTATION
 /* HAIROBB__KERNEL_PASS: the file includes itself to compile the kernels again */
@@ -660,6 +663,9 @@ HAIROBB_DEF void hairobb_hair_free(hairobb_hair *hair);
 #ifndef HAIROBB__KERNEL_PASS
 #define HAIROBB_IMPLEMENTATION_DONE
 
+/* ------------------------------------------------------------------------ */
+/* >>platform  Platform: C library, allocation, instruction sets, threads   */
+/* ------------------------------------------------------------------------ */
 #include <float.h>
 #include <math.h>
 #include <string.h>
@@ -754,7 +760,7 @@ static void *hairobb__malloc_large(size_t bytes, void *user)
 }
 
 /* ------------------------------------------------------------------------ */
-/* Limits and cost model                                                     */
+/* >>defaults  Limits, defaults, cost model, node references                */
 /* ------------------------------------------------------------------------ */
 #ifndef HAIROBB_NODE_WIDTH             /* children per node: 4 or 8 */
 #if HAIROBB__AVX || HAIROBB__DISPATCH
@@ -836,7 +842,7 @@ static void *hairobb__malloc_large(size_t bytes, void *user)
 #define HAIROBB__STILL_TYPE(type) (HAIROBB__MOVING(type) ? (type) - 4u : (type))
 
 /* ------------------------------------------------------------------------ */
-/* Small vector helpers                                                      */
+/* >>vector  Small vector helpers                                           */
 /* ------------------------------------------------------------------------ */
 /* Helpers the kernels call are always inlined: inside the AVX2 copy they are
    then compiled for AVX2 too. A call from AVX2 code into SSE code (without
@@ -937,60 +943,8 @@ HAIROBB__INLINE int hairobb__lowest_bit(unsigned bits)
 }
 
 /* ------------------------------------------------------------------------ */
-/* The BVH                                                                   */
+/* >>bvh  The BVH object                                                    */
 /* ------------------------------------------------------------------------ */
-/* Four axis-aligned child boxes, struct of arrays: 128 bytes. */
-typedef struct hairobb__aabb_node {
-    float lower[3][HAIROBB__W], upper[3][HAIROBB__W];   /* [axis][child] */
-    uint64_t child[HAIROBB__W];
-} hairobb__aabb_node;
-
-/* Four oriented child boxes, each an affine map of world space onto the unit
-   cube: unit = M * (p - centre) + m, with xfm[0..8] = M row-major and
-   xfm[9..11] = m, each entry holding all children. Subtracting a centre
-   near the node first keeps the transform's rounding proportional to the
-   distance between ray origin and node, not to their distance from the
-   world origin: 240 bytes. */
-typedef struct hairobb__obb_node {
-    float centre[4];                  /* xyz, w unused */
-    float xfm[12][HAIROBB__W];
-    uint64_t child[HAIROBB__W];
-} hairobb__obb_node;
-
-/* Four boxes in one rotated frame, the node's hair space, around a centre:
-   the ray is moved and rotated once, then tested as in an AABB node: 176 bytes. */
-typedef struct hairobb__rotated_node {
-    float rotation[9], centre[3];     /* rows: the frame's axes */
-    float lower[3][HAIROBB__W], upper[3][HAIROBB__W];   /* [axis][child], of R * (p - centre) */
-    uint64_t child[HAIROBB__W];
-} hairobb__rotated_node;
-
-/* The paper's compressed node: the boxes of all children in one hair space
-   (a rotation quantised to signed bytes q = 127 R, used as the frame q
-   itself; the identity for an axis-aligned node) around a float centre, each child box as signed bytes
-   times a per-axis float step, rounded outward: 96 bytes 4-wide, 160 8-wide. */
-typedef struct hairobb__compressed_node {
-    float centre[3], step[3];
-    signed char rotation[9];          /* rows of the frame times 127 */
-    signed char lower[3][HAIROBB__W], upper[3][HAIROBB__W];   /* [axis][child] in steps */
-    unsigned char pad[HAIROBB__W == 8 ? 15 : 7];              /* child[] at a multiple of 16 */
-    uint64_t child[HAIROBB__W];
-} hairobb__compressed_node;
-/* Compressed with a rotation per child, as the per-child affine node: each
-   child's box is in its own frame rotation[.][child] (127 R), around the
-   node's centre, in steps shared by the node: 128 bytes 4-wide, 208 8-wide. */
-typedef struct hairobb__compressed_obb_node {
-    float centre[3], step[3];
-    signed char rotation[9][HAIROBB__W];                      /* [entry][child] */
-    signed char lower[3][HAIROBB__W], upper[3][HAIROBB__W];   /* [axis][child] in steps */
-#if HAIROBB__W == 4
-    unsigned char pad[12];                                    /* child[] at a multiple of 16 */
-#endif
-    uint64_t child[HAIROBB__W];
-} hairobb__compressed_obb_node;
-typedef char hairobb__compressed_obb_node_size[sizeof(hairobb__compressed_obb_node) == (HAIROBB__W == 8 ? 208 : 128) ? 1 : -1];
-typedef char hairobb__compressed_node_size[sizeof(hairobb__compressed_node) == (HAIROBB__W == 8 ? 160 : 96) ? 1 : -1];
-
 /* What shapes a tree and its intersector: the build's resolved options,
    which hairobb_save records and hairobb_load reads back. */
 typedef struct hairobb__tree_settings {
@@ -1064,7 +1018,7 @@ HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uin
 HAIROBB__INLINE void hairobb__to_bezier(hairobb_basis basis, const float *p, const float *t, float b[16]);
 
 /* ------------------------------------------------------------------------ */
-/* Input: validation and per-segment bounds                                  */
+/* >>input  Input: results, options, validation, curve bases, bounds        */
 /* ------------------------------------------------------------------------ */
 HAIROBB_DEF const char *hairobb_result_string(hairobb_result r)
 {
@@ -1456,7 +1410,7 @@ HAIROBB__INLINE void hairobb__segment_box_prep(const float *cp, const hairobb__f
 }
 
 /* ------------------------------------------------------------------------ */
-/* Input: Cem Yuksel's .hair files                                           */
+/* >>hair_file  Input: Cem Yuksel's .hair files                             */
 /* ------------------------------------------------------------------------ */
 /* A 128-byte little-endian header ("HAIR", strand count, point count, array
    flags, default segments per strand, thickness, transparency, colour, 88
@@ -1715,7 +1669,7 @@ HAIROBB_DEF void hairobb_hair_free(hairobb_hair *hair)
 }
 
 /* ------------------------------------------------------------------------ */
-/* Hair space                                                                */
+/* >>hair_space  Hair space: references, the builder, frames                */
 /* ------------------------------------------------------------------------ */
 /* A reference is a segment, or the part [u0, u1] of one that spatial splits
    clipped. The builder keeps them in arrays indexed by position; a range of
@@ -2031,8 +1985,7 @@ static void hairobb__choose_hair_space(const hairobb__builder *b, const hairobb_
 }
 
 /* ------------------------------------------------------------------------ */
-/* Builder: binned SAH (object and spatial splits in world and hair space,  */
-/* similar-orientation clusters), filling W children                        */
+/* >>bins  Builder: binning (object bins, world and hair space, in parts)   */
 /* ------------------------------------------------------------------------ */
 enum { HAIROBB__SPLIT_MEDIAN, HAIROBB__SPLIT_OBJECT, HAIROBB__SPLIT_SPATIAL, HAIROBB__SPLIT_CLUSTER };
 
@@ -2482,6 +2435,9 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
     }
 }
 
+/* ------------------------------------------------------------------------ */
+/* >>splits  Builder: splits (clusters, node boxes, the cheapest split)     */
+/* ------------------------------------------------------------------------ */
 /* Which of two main directions a reference is closer to (0 or 1). */
 static int hairobb__cluster_of(const hairobb__builder *b, size_t i, const float direction[2][3])
 {
@@ -2695,6 +2651,9 @@ static void hairobb__update_tries(hairobb__tries *t, const hairobb__split *split
     }
 }
 
+/* ------------------------------------------------------------------------ */
+/* >>partition  Builder: partition (and clipping for spatial splits)        */
+/* ------------------------------------------------------------------------ */
 /* Swaps the references at positions i and j. Boxes in the frame last
    binned are read only by the partition's test of the position it looks at
    next: with frame_box, i (looked at next) gets j's; the rest are stale
@@ -2856,6 +2815,9 @@ static void hairobb__partition(hairobb__builder *b, const hairobb__range *r, con
     right->begin = lo + share; right->end = end + share; right->cap = r->cap;
 }
 
+/* ------------------------------------------------------------------------ */
+/* >>node_store  Builder: node memory, progress, leaves                     */
+/* ------------------------------------------------------------------------ */
 /* Node memory starts at a 64-byte boundary inside what HAIROBB_MALLOC gave
    (bytes + 64 of it). */
 static unsigned char *hairobb__align64(unsigned char *allocation)
@@ -2931,6 +2893,71 @@ static uint64_t hairobb__make_leaf(hairobb__builder *b, const hairobb__range *r,
     return ((uint64_t)start << 8) | ((uint64_t)(r->end - r->begin) << 4) | HAIROBB__REF_LEAF;
 }
 
+/* ------------------------------------------------------------------------ */
+/* >>layouts  Node layouts: each layout's struct and writer                 */
+/* ------------------------------------------------------------------------ */
+/* The node layouts the builder writes and the traversal reads, each
+   struct with its writer; hairobb__write_boxes picks the writer of a
+   node's type. The traversal's test of each layout is with the kernels
+   (>>traversal), which are compiled once more for AVX2. */
+
+/* Four axis-aligned child boxes, struct of arrays: 128 bytes. */
+typedef struct hairobb__aabb_node {
+    float lower[3][HAIROBB__W], upper[3][HAIROBB__W];   /* [axis][child] */
+    uint64_t child[HAIROBB__W];
+} hairobb__aabb_node;
+
+/* Four boxes in one rotated frame, the node's hair space, around a centre:
+   the ray is moved and rotated once, then tested as in an AABB node: 176 bytes. */
+typedef struct hairobb__rotated_node {
+    float rotation[9], centre[3];     /* rows: the frame's axes */
+    float lower[3][HAIROBB__W], upper[3][HAIROBB__W];   /* [axis][child], of R * (p - centre) */
+    uint64_t child[HAIROBB__W];
+} hairobb__rotated_node;
+
+/* AABB and rotated nodes: all boxes in float, in one frame (the world
+   axes, no centre, for AABB). axis_boxes: see hairobb__write_boxes. */
+static void hairobb__write_one_frame_node(const hairobb__builder *b, unsigned char *node_memory, unsigned node_type,
+                                          const float centre[3], const hairobb__range *ranges, int count,
+                                          const float (*frames)[9], const float (*axis_boxes)[6])
+{
+    int i, k;
+    float (*lower)[HAIROBB__W], (*upper)[HAIROBB__W];
+    const float *box_centre = NULL;
+    if (node_type == HAIROBB__REF_ROTATED) {
+        hairobb__rotated_node *node = HAIROBB__CAST(hairobb__rotated_node *, (void *)node_memory);
+        memcpy(node->centre, centre, sizeof node->centre);
+        box_centre = node->centre;
+        lower = node->lower; upper = node->upper;
+    } else {
+        hairobb__aabb_node *node = HAIROBB__CAST(hairobb__aabb_node *, (void *)node_memory);
+        lower = node->lower; upper = node->upper;
+    }
+    for (i = 0; i < HAIROBB__W; ++i) {
+        float lo[3], hi[3];
+        if (i < count && axis_boxes && node_type == HAIROBB__REF_AABB) {
+            memcpy(lo, axis_boxes[i], sizeof lo);
+            memcpy(hi, axis_boxes[i] + 3, sizeof hi);
+            hairobb__pad_box(lo, hi);
+        } else if (i < count) {
+            hairobb__node_box(b, &ranges[i], frames[0], box_centre, lo, hi);
+        } else { for (k = 0; k < 3; ++k) { lo[k] = INFINITY; hi[k] = -INFINITY; } }
+        for (k = 0; k < 3; ++k) { lower[k][i] = lo[k]; upper[k][i] = hi[k]; }
+    }
+}
+
+/* Four oriented child boxes, each an affine map of world space onto the unit
+   cube: unit = M * (p - centre) + m, with xfm[0..8] = M row-major and
+   xfm[9..11] = m, each entry holding all children. Subtracting a centre
+   near the node first keeps the transform's rounding proportional to the
+   distance between ray origin and node, not to their distance from the
+   world origin: 240 bytes. */
+typedef struct hairobb__obb_node {
+    float centre[4];                  /* xyz, w unused */
+    float xfm[12][HAIROBB__W];
+    uint64_t child[HAIROBB__W];
+} hairobb__obb_node;
+
 /* Writes the affine map of box [lower, upper] in frame onto the unit cube
    into lane `lane` of an OBB node. */
 static void hairobb__store_obb(hairobb__obb_node *node, int lane, const float frame[9],
@@ -2943,6 +2970,29 @@ static void hairobb__store_obb(hairobb__obb_node *node, int lane, const float fr
         float scale = 1.0f / extent;
         for (col = 0; col < 3; ++col) node->xfm[3 * row + col][lane] = frame[3 * row + col] * scale;
         node->xfm[9 + row][lane] = -lower[row] * scale;
+    }
+}
+
+/* An affine OBB node's boxes: child i's map from frames[i]. */
+static void hairobb__write_obb_node(const hairobb__builder *b, unsigned char *node_memory, const float centre[3],
+                                    const hairobb__range *ranges, int count, const float (*frames)[9])
+{
+    int i;
+    hairobb__obb_node *node = HAIROBB__CAST(hairobb__obb_node *, (void *)node_memory);
+    memcpy(node->centre, centre, 3 * sizeof(float));
+    node->centre[3] = 0.0f;
+    for (i = 0; i < HAIROBB__W; ++i) {
+        float frame[9], lower[3], upper[3];
+        if (i < count) {
+            memcpy(frame, frames[i], sizeof frame);
+            hairobb__node_box(b, &ranges[i], frame, node->centre, lower, upper);
+        } else {
+            /* an empty child maps everything to (2,2,2): never inside the unit cube */
+            memset(frame, 0, sizeof frame);
+            lower[0] = lower[1] = lower[2] = -2.0f;
+            upper[0] = upper[1] = upper[2] = -1.0f;
+        }
+        hairobb__store_obb(node, i, frame, lower, upper);
     }
 }
 
@@ -2987,6 +3037,67 @@ static void hairobb__store_compressed(float step_out[3], signed char (*lower_byt
     }
 }
 
+/* The paper's compressed node: the boxes of all children in one hair space
+   (a rotation quantised to signed bytes q = 127 R, used as the frame q
+   itself; the identity for an axis-aligned node) around a float centre, each child box as signed bytes
+   times a per-axis float step, rounded outward: 96 bytes 4-wide, 160 8-wide. */
+typedef struct hairobb__compressed_node {
+    float centre[3], step[3];
+    signed char rotation[9];          /* rows of the frame times 127 */
+    signed char lower[3][HAIROBB__W], upper[3][HAIROBB__W];   /* [axis][child] in steps */
+    unsigned char pad[HAIROBB__W == 8 ? 15 : 7];              /* child[] at a multiple of 16 */
+    uint64_t child[HAIROBB__W];
+} hairobb__compressed_node;
+typedef char hairobb__compressed_node_size[sizeof(hairobb__compressed_node) == (HAIROBB__W == 8 ? 160 : 96) ? 1 : -1];
+
+/* The paper's compressed node's boxes (axis-aligned or rotated), in bytes
+   of frames[0]. */
+static void hairobb__write_compressed_node(const hairobb__builder *b, unsigned char *node_memory, const float centre[3],
+                                           const hairobb__range *ranges, int count, const float (*frames)[9])
+{
+    int i;
+    hairobb__compressed_node *node = HAIROBB__CAST(hairobb__compressed_node *, (void *)node_memory);
+    float lower[HAIROBB__W][3], upper[HAIROBB__W][3];
+    memcpy(node->centre, centre, 3 * sizeof(float));
+    for (i = 0; i < count; ++i) hairobb__node_box(b, &ranges[i], frames[0], node->centre, lower[i], upper[i]);
+    hairobb__store_compressed(node->step, node->lower, node->upper, count, (const float (*)[3])lower, (const float (*)[3])upper);
+}
+
+/* Compressed with a rotation per child, as the per-child affine node: each
+   child's box is in its own frame rotation[.][child] (127 R), around the
+   node's centre, in steps shared by the node: 128 bytes 4-wide, 208 8-wide. */
+typedef struct hairobb__compressed_obb_node {
+    float centre[3], step[3];
+    signed char rotation[9][HAIROBB__W];                      /* [entry][child] */
+    signed char lower[3][HAIROBB__W], upper[3][HAIROBB__W];   /* [axis][child] in steps */
+#if HAIROBB__W == 4
+    unsigned char pad[12];                                    /* child[] at a multiple of 16 */
+#endif
+    uint64_t child[HAIROBB__W];
+} hairobb__compressed_obb_node;
+typedef char hairobb__compressed_obb_node_size[sizeof(hairobb__compressed_obb_node) == (HAIROBB__W == 8 ? 208 : 128) ? 1 : -1];
+
+/* A compressed per-child node's boxes, in bytes of each child's frame. */
+static void hairobb__write_compressed_obb_node(const hairobb__builder *b, unsigned char *node_memory, const float centre[3],
+                                               const hairobb__range *ranges, int count, const float (*frames)[9])
+{
+    int i, k;
+    hairobb__compressed_obb_node *node = HAIROBB__CAST(hairobb__compressed_obb_node *, (void *)node_memory);
+    float lower[HAIROBB__W][3], upper[HAIROBB__W][3];
+    memcpy(node->centre, centre, 3 * sizeof(float));
+    for (i = 0; i < count; ++i) hairobb__node_box(b, &ranges[i], frames[i], node->centre, lower[i], upper[i]);
+    hairobb__store_compressed(node->step, node->lower, node->upper, count, (const float (*)[3])lower, (const float (*)[3])upper);
+    /* Empty lanes: the identity and the point box at -128 steps on each
+       axis, outside every child. An inverted box would not do: this
+       node's test takes each slab's planes in either order, which turns
+       it into the whole cube of steps (1.24 visits of empty children a
+       ray on combed fur, before). */
+    for (i = count; i < HAIROBB__W; ++i) {
+        node->rotation[0][i] = node->rotation[4][i] = node->rotation[8][i] = 127;
+        for (k = 0; k < 3; ++k) node->lower[k][i] = node->upper[k][i] = -128;
+    }
+}
+
 static size_t hairobb__node_size(unsigned node_type)
 {
     switch (HAIROBB__STILL_TYPE(node_type)) {
@@ -3011,62 +3122,6 @@ static size_t hairobb__node_stride(unsigned node_type)
 {
     return hairobb__node_size(node_type) + (node_type == HAIROBB__REF_OBB ? HAIROBB__W * 3 * sizeof(float) : 0) +
            (HAIROBB__MOVING(node_type) ? HAIROBB__END_PLANES : 0);
-}
-
-/* Keeps the frames of a node's children as its type stores them (node
-   zeroed): per child (affine OBB: the direction a frame was made from,
-   (0,0,0) for the world axes; compressed per child: bytes), or frames[0]
-   for all (rotated: floats; compressed rotated: bytes). */
-static void hairobb__store_frames(unsigned char *node, unsigned node_type, int count, const float (*frames)[9])
-{
-    int i, k;
-    node_type = HAIROBB__STILL_TYPE(node_type);
-    if (node_type == HAIROBB__REF_OBB) {
-        float *directions = HAIROBB__CAST(float *, (void *)(node + sizeof(hairobb__obb_node)));
-        float identity[9];
-        hairobb__identity_frame(identity);
-        for (i = 0; i < count; ++i)
-            if (memcmp(frames[i], identity, sizeof identity) != 0) memcpy(directions + 3 * i, frames[i] + 6, 3 * sizeof(float));
-    } else if (node_type == HAIROBB__REF_QOBB_PER_CHILD) {
-        hairobb__compressed_obb_node *q = HAIROBB__CAST(hairobb__compressed_obb_node *, (void *)node);
-        for (i = 0; i < count; ++i)
-            for (k = 0; k < 9; ++k) q->rotation[k][i] = (signed char)lrintf(frames[i][k] * 127.0f);
-    } else if (node_type == HAIROBB__REF_QOBB) {
-        hairobb__compressed_node *q = HAIROBB__CAST(hairobb__compressed_node *, (void *)node);
-        for (k = 0; k < 9; ++k) q->rotation[k] = (signed char)lrintf(frames[0][k] * 127.0f);
-    } else if (node_type == HAIROBB__REF_ROTATED) {
-        memcpy(HAIROBB__CAST(hairobb__rotated_node *, (void *)node)->rotation, frames[0], 9 * sizeof(float));
-    }
-}
-
-/* The frames the node's child boxes are in, as the traversal decodes
-   them: frames[i] for child i < count, or frames[0] for all children of
-   the one-frame types (axis-aligned nodes: the world axes). A frame made
-   from a direction is made again from it, bit for bit. */
-static void hairobb__node_frames(const unsigned char *node, unsigned node_type, int count, float (*frames)[9])
-{
-    int i, k;
-    node_type = HAIROBB__STILL_TYPE(node_type);
-    if (node_type == HAIROBB__REF_OBB) {
-        const float *directions = HAIROBB__CAST(const float *, (const void *)(node + sizeof(hairobb__obb_node)));
-        for (i = 0; i < count; ++i) {
-            if (directions[3 * i] == 0.0f && directions[3 * i + 1] == 0.0f && directions[3 * i + 2] == 0.0f)
-                hairobb__identity_frame(frames[i]);
-            else
-                hairobb__frame_from_direction(directions + 3 * i, frames[i]);
-        }
-    } else if (node_type == HAIROBB__REF_QOBB_PER_CHILD) {
-        /* hairobb__decode_rotation of each lane, in the bytes' order */
-        const hairobb__compressed_obb_node *q = HAIROBB__CAST(const hairobb__compressed_obb_node *, (const void *)node);
-        for (k = 0; k < 9; ++k)
-            for (i = 0; i < count; ++i) frames[i][k] = (float)q->rotation[k][i];
-    } else if (node_type == HAIROBB__REF_QOBB) {
-        hairobb__decode_rotation(HAIROBB__CAST(const hairobb__compressed_node *, (const void *)node)->rotation, frames[0]);
-    } else if (node_type == HAIROBB__REF_ROTATED) {
-        memcpy(frames[0], HAIROBB__CAST(const hairobb__rotated_node *, (const void *)node)->rotation, 9 * sizeof(float));
-    } else {
-        hairobb__identity_frame(frames[0]);
-    }
 }
 
 /* Linear bounds of a moving range: its boxes at time 0 and time 1 in frame
@@ -3165,8 +3220,8 @@ static void hairobb__store_compressed_ends(float step_out[3], signed char *plane
     }
 }
 
-/* hairobb__write_boxes for the moving compressed nodes: both ends' planes. */
-static void hairobb__write_moving_boxes(const hairobb__builder *b, unsigned char *node_memory, unsigned node_type,
+/* Moving hair's compressed nodes (either kind): both ends' planes. */
+static void hairobb__write_moving_node(const hairobb__builder *b, unsigned char *node_memory, unsigned node_type,
                                         const float centre[3], const hairobb__range *ranges, int count, const float (*frames)[9])
 {
     float lower[HAIROBB__W][2][3], upper[HAIROBB__W][2][3];
@@ -3194,6 +3249,62 @@ static void hairobb__write_moving_boxes(const hairobb__builder *b, unsigned char
     }
 }
 
+/* Keeps the frames of a node's children as its type stores them (node
+   zeroed): per child (affine OBB: the direction a frame was made from,
+   (0,0,0) for the world axes; compressed per child: bytes), or frames[0]
+   for all (rotated: floats; compressed rotated: bytes). */
+static void hairobb__store_frames(unsigned char *node, unsigned node_type, int count, const float (*frames)[9])
+{
+    int i, k;
+    node_type = HAIROBB__STILL_TYPE(node_type);
+    if (node_type == HAIROBB__REF_OBB) {
+        float *directions = HAIROBB__CAST(float *, (void *)(node + sizeof(hairobb__obb_node)));
+        float identity[9];
+        hairobb__identity_frame(identity);
+        for (i = 0; i < count; ++i)
+            if (memcmp(frames[i], identity, sizeof identity) != 0) memcpy(directions + 3 * i, frames[i] + 6, 3 * sizeof(float));
+    } else if (node_type == HAIROBB__REF_QOBB_PER_CHILD) {
+        hairobb__compressed_obb_node *q = HAIROBB__CAST(hairobb__compressed_obb_node *, (void *)node);
+        for (i = 0; i < count; ++i)
+            for (k = 0; k < 9; ++k) q->rotation[k][i] = (signed char)lrintf(frames[i][k] * 127.0f);
+    } else if (node_type == HAIROBB__REF_QOBB) {
+        hairobb__compressed_node *q = HAIROBB__CAST(hairobb__compressed_node *, (void *)node);
+        for (k = 0; k < 9; ++k) q->rotation[k] = (signed char)lrintf(frames[0][k] * 127.0f);
+    } else if (node_type == HAIROBB__REF_ROTATED) {
+        memcpy(HAIROBB__CAST(hairobb__rotated_node *, (void *)node)->rotation, frames[0], 9 * sizeof(float));
+    }
+}
+
+/* The frames the node's child boxes are in, as the traversal decodes
+   them: frames[i] for child i < count, or frames[0] for all children of
+   the one-frame types (axis-aligned nodes: the world axes). A frame made
+   from a direction is made again from it, bit for bit. */
+static void hairobb__node_frames(const unsigned char *node, unsigned node_type, int count, float (*frames)[9])
+{
+    int i, k;
+    node_type = HAIROBB__STILL_TYPE(node_type);
+    if (node_type == HAIROBB__REF_OBB) {
+        const float *directions = HAIROBB__CAST(const float *, (const void *)(node + sizeof(hairobb__obb_node)));
+        for (i = 0; i < count; ++i) {
+            if (directions[3 * i] == 0.0f && directions[3 * i + 1] == 0.0f && directions[3 * i + 2] == 0.0f)
+                hairobb__identity_frame(frames[i]);
+            else
+                hairobb__frame_from_direction(directions + 3 * i, frames[i]);
+        }
+    } else if (node_type == HAIROBB__REF_QOBB_PER_CHILD) {
+        /* hairobb__decode_rotation of each lane, in the bytes' order */
+        const hairobb__compressed_obb_node *q = HAIROBB__CAST(const hairobb__compressed_obb_node *, (const void *)node);
+        for (k = 0; k < 9; ++k)
+            for (i = 0; i < count; ++i) frames[i][k] = (float)q->rotation[k][i];
+    } else if (node_type == HAIROBB__REF_QOBB) {
+        hairobb__decode_rotation(HAIROBB__CAST(const hairobb__compressed_node *, (const void *)node)->rotation, frames[0]);
+    } else if (node_type == HAIROBB__REF_ROTATED) {
+        memcpy(frames[0], HAIROBB__CAST(const hairobb__rotated_node *, (const void *)node)->rotation, 9 * sizeof(float));
+    } else {
+        hairobb__identity_frame(frames[0]);
+    }
+}
+
 /* Writes the boxes of a node's children, child i bounding the references
    of ranges[i] in its frame (hairobb__node_frames) around centre, and the
    node's empty lanes; its frames and child references are left as they
@@ -3205,76 +3316,21 @@ static void hairobb__write_boxes(const hairobb__builder *b, unsigned char *node_
                                  const float centre[3], const hairobb__range *ranges, int count, const float (*frames)[9],
                                  const float (*axis_boxes)[6])
 {
-    int i, k;
-    if (HAIROBB__MOVING(node_type)) {
-        hairobb__write_moving_boxes(b, node_memory, node_type, centre, ranges, count, frames);
-        return;
-    }
-    if (node_type == HAIROBB__REF_OBB) {
-        hairobb__obb_node *node = HAIROBB__CAST(hairobb__obb_node *, (void *)node_memory);
-        memcpy(node->centre, centre, 3 * sizeof(float));
-        node->centre[3] = 0.0f;
-        for (i = 0; i < HAIROBB__W; ++i) {
-            float frame[9], lower[3], upper[3];
-            if (i < count) {
-                memcpy(frame, frames[i], sizeof frame);
-                hairobb__node_box(b, &ranges[i], frame, node->centre, lower, upper);
-            } else {
-                /* an empty child maps everything to (2,2,2): never inside the unit cube */
-                memset(frame, 0, sizeof frame);
-                lower[0] = lower[1] = lower[2] = -2.0f;
-                upper[0] = upper[1] = upper[2] = -1.0f;
-            }
-            hairobb__store_obb(node, i, frame, lower, upper);
-        }
-    } else if (node_type == HAIROBB__REF_QOBB_PER_CHILD) {
-        hairobb__compressed_obb_node *node = HAIROBB__CAST(hairobb__compressed_obb_node *, (void *)node_memory);
-        float lower[HAIROBB__W][3], upper[HAIROBB__W][3];
-        memcpy(node->centre, centre, 3 * sizeof(float));
-        for (i = 0; i < count; ++i) hairobb__node_box(b, &ranges[i], frames[i], node->centre, lower[i], upper[i]);
-        hairobb__store_compressed(node->step, node->lower, node->upper, count, (const float (*)[3])lower, (const float (*)[3])upper);
-        /* Empty lanes: the identity and the point box at -128 steps on each
-           axis, outside every child. An inverted box would not do: this
-           node's test takes each slab's planes in either order, which turns
-           it into the whole cube of steps (1.24 visits of empty children a
-           ray on combed fur, before). */
-        for (i = count; i < HAIROBB__W; ++i) {
-            node->rotation[0][i] = node->rotation[4][i] = node->rotation[8][i] = 127;
-            for (k = 0; k < 3; ++k) node->lower[k][i] = node->upper[k][i] = -128;
-        }
-    } else if (node_type == HAIROBB__REF_QAABB || node_type == HAIROBB__REF_QOBB) {
-        hairobb__compressed_node *node = HAIROBB__CAST(hairobb__compressed_node *, (void *)node_memory);
-        float lower[HAIROBB__W][3], upper[HAIROBB__W][3];
-        memcpy(node->centre, centre, 3 * sizeof(float));
-        for (i = 0; i < count; ++i) hairobb__node_box(b, &ranges[i], frames[0], node->centre, lower[i], upper[i]);
-        hairobb__store_compressed(node->step, node->lower, node->upper, count, (const float (*)[3])lower, (const float (*)[3])upper);
-    } else {
-        /* AABB and rotated nodes: all boxes in one frame (world axes, no centre, for AABB) */
-        float (*lower)[HAIROBB__W], (*upper)[HAIROBB__W];
-        const float *box_centre = NULL;
-        if (node_type == HAIROBB__REF_ROTATED) {
-            hairobb__rotated_node *node = HAIROBB__CAST(hairobb__rotated_node *, (void *)node_memory);
-            memcpy(node->centre, centre, sizeof node->centre);
-            box_centre = node->centre;
-            lower = node->lower; upper = node->upper;
-        } else {
-            hairobb__aabb_node *node = HAIROBB__CAST(hairobb__aabb_node *, (void *)node_memory);
-            lower = node->lower; upper = node->upper;
-        }
-        for (i = 0; i < HAIROBB__W; ++i) {
-            float lo[3], hi[3];
-            if (i < count && axis_boxes && node_type == HAIROBB__REF_AABB) {
-                memcpy(lo, axis_boxes[i], sizeof lo);
-                memcpy(hi, axis_boxes[i] + 3, sizeof hi);
-                hairobb__pad_box(lo, hi);
-            } else if (i < count) {
-                hairobb__node_box(b, &ranges[i], frames[0], box_centre, lo, hi);
-            } else { for (k = 0; k < 3; ++k) { lo[k] = INFINITY; hi[k] = -INFINITY; } }
-            for (k = 0; k < 3; ++k) { lower[k][i] = lo[k]; upper[k][i] = hi[k]; }
-        }
-    }
+    if (HAIROBB__MOVING(node_type))
+        hairobb__write_moving_node(b, node_memory, node_type, centre, ranges, count, frames);
+    else if (node_type == HAIROBB__REF_OBB)
+        hairobb__write_obb_node(b, node_memory, centre, ranges, count, frames);
+    else if (node_type == HAIROBB__REF_QOBB_PER_CHILD)
+        hairobb__write_compressed_obb_node(b, node_memory, centre, ranges, count, frames);
+    else if (node_type == HAIROBB__REF_QAABB || node_type == HAIROBB__REF_QOBB)
+        hairobb__write_compressed_node(b, node_memory, centre, ranges, count, frames);
+    else
+        hairobb__write_one_frame_node(b, node_memory, node_type, centre, ranges, count, frames, axis_boxes);
 }
 
+/* ------------------------------------------------------------------------ */
+/* >>node_build  Builder: a node of W children, a range to a subtree        */
+/* ------------------------------------------------------------------------ */
 static uint64_t hairobb__build_range(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries,
                                      const float *hair_space);
 static uint64_t hairobb__add_task(hairobb__builder *b, const hairobb__range *r, unsigned depth, hairobb__tries tries);
@@ -3433,7 +3489,7 @@ static uint64_t hairobb__build_range(hairobb__builder *b, const hairobb__range *
 }
 
 /* ------------------------------------------------------------------------ */
-/* Builder: tasks on threads, then one tree                                  */
+/* >>tasks  Builder: tasks on threads                                       */
 /* ------------------------------------------------------------------------ */
 /* References of the largest subtree built (or refitted) as one task: about
    HAIROBB__TASKS of them, of at least HAIROBB__TASK_MIN references; from
@@ -3815,6 +3871,9 @@ static void hairobb__top_parts(const hairobb__builder *b, size_t parts, hairobb_
     for (k = 0; k < parts; ++k) run(context, (unsigned)k);
 }
 
+/* ------------------------------------------------------------------------ */
+/* >>passes  Builder: the passes over every segment, and the build's steps  */
+/* ------------------------------------------------------------------------ */
 /* The build's first pass: every position holds its segment whole, with its
    world box; each part's bounds of the boxes (of every step's, for moving
    hair whose SAH boxes are at mid-time), merged into the BVH's. */
@@ -4232,6 +4291,9 @@ static hairobb_result hairobb__build_leaves(hairobb__builder *b, hairobb_bvh *bv
     return HAIROBB_OK;
 }
 
+/* ------------------------------------------------------------------------ */
+/* >>build_api  Building: hairobb_build, hairobb_free, memory and stats     */
+/* ------------------------------------------------------------------------ */
 HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_count,
                              const uint32_t *indices, size_t segment_count,
                              const hairobb_build_options *options, hairobb_bvh **out)
@@ -4258,10 +4320,12 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
 
     memset(&b, 0, sizeof b);
     bvh = HAIROBB__CAST(hairobb_bvh *, HAIROBB_MALLOC(sizeof *bvh, opt.allocator_user));
-    if (bvh) memset(bvh, 0, sizeof *bvh);     /* the failure path reads it */
+    if (bvh) {   /* the failure path frees it with hairobb_free */
+        memset(bvh, 0, sizeof *bvh);
+        bvh->allocator_user = opt.allocator_user;
+    }
     b.error = HAIROBB_ERROR_OUT_OF_MEMORY;
     if (!hairobb__builder_start(&b, &opt, segment_count, extra, steps) || !bvh) goto failed;
-    bvh->allocator_user = b.user;
     if (!hairobb__take_hair(bvh, &opt, vertices, vertex_count, indices, segment_count, steps)) goto failed;
     /* the builder reads the points as tracing will: the copy, or the caller's */
     b.vertices = bvh->vertices;
@@ -4329,7 +4393,7 @@ HAIROBB_DEF void hairobb_bounds(const hairobb_bvh *bvh, float lower[3], float up
 }
 
 /* ------------------------------------------------------------------------ */
-/* Refit: a built tree over new positions, and its SAH cost                  */
+/* >>refit  Refit: a built tree over new positions, and its SAH cost        */
 /* ------------------------------------------------------------------------ */
 /* Surface area of child `lane`'s box as the node stores it (padded,
    quantised), in world units: its extents over the lengths of its frame's
@@ -4687,7 +4751,7 @@ HAIROBB_DEF hairobb_result hairobb_refit_motion(hairobb_bvh *bvh, const float *c
 }
 
 /* ------------------------------------------------------------------------ */
-/* Save and load                                                             */
+/* >>save_load  Save and load                                               */
 /* ------------------------------------------------------------------------ */
 /* The format (host byte order; the byte-order word tells another host's):
      header, HAIROBB__SAVE_HEADER bytes at the offsets HAIROBB__AT_*;
@@ -5208,7 +5272,7 @@ HAIROBB_DEF hairobb_result hairobb_load_file(const char *path,
 #endif
 
 /* ------------------------------------------------------------------------ */
-/* Rays: what every traversal path reads                                   */
+/* >>rays  Rays: what every traversal path reads                            */
 /* ------------------------------------------------------------------------ */
 
 /* A ray prepared for slab tests against boxes in one frame. */
@@ -5359,12 +5423,12 @@ static int hairobb__ray_setup_from(hairobb__ray_state *rs, const hairobb_bvh *bv
 #endif /* !HAIROBB__KERNEL_PASS */
 
 /* ======================================================================== */
-/* The kernels: SIMD, traversal and ray/curve intersection. Compiled for    */
+/* >>kernels  SIMD, traversal and ray/curve intersection. Compiled for      */
 /* the instruction sets the compiler targets, and again for AVX2 with every */
 /* name suffixed _avx2 where HAIROBB__DISPATCH (see "Runtime dispatch").    */
 /* ======================================================================== */
 /* ------------------------------------------------------------------------ */
-/* SIMD: 4 or 8 lanes for nodes, 8 for curve points (inline, as a build    */
+/* >>simd  4 or 8 lanes for nodes, 8 for curve points (inline, as a build   */
 /* uses only some). Each operation has a plain C twin with the same         */
 /* rounding and NaN rule (min(a,b) is a < b ? a : b, as SSE's minps), so    */
 /* every path gives the same answers.                                       */
@@ -5556,7 +5620,7 @@ typedef hairobb__v4 hairobb__vn;
 #endif
 
 /* ------------------------------------------------------------------------ */
-/* Segment points as traced                                                  */
+/* >>segment_points  Segment points as traced                               */
 /* ------------------------------------------------------------------------ */
 /* The Bezier control points (x, y, z, r each) of a segment given in another
    basis: p its points (4, or 2 for Hermite and linear), t the Hermite
@@ -5704,7 +5768,7 @@ HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uin
 }
 
 /* ------------------------------------------------------------------------ */
-/* Traversal                                                                 */
+/* >>traversal  Traversal: node tests, nearest first                        */
 /* ------------------------------------------------------------------------ */
 HAIROBB__INLINE hairobb__vn hairobb__far_scale(hairobb__vn tfar)
 {
@@ -5976,7 +6040,7 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
 }
 
 /* ------------------------------------------------------------------------ */
-/* Ray / curve intersection                                                  */
+/* >>intersector  Ray / curve intersection                                  */
 /* ------------------------------------------------------------------------ */
 /* A segment's control points moved to the ray origin (qx, qy, qz) and its
    radii r, lane i = control point i. */
@@ -6500,7 +6564,7 @@ static int hairobb__hit_filtered_out(const hairobb__ray_state *rs, uint32_t prim
 
 #ifndef HAIROBB__KERNEL_PASS
 /* ------------------------------------------------------------------------ */
-/* Tracing API                                                               */
+/* >>tracing_api  Tracing API                                               */
 /* ------------------------------------------------------------------------ */
 #if HAIROBB__DISPATCH
 static int hairobb__traverse_avx2(const hairobb_bvh *bvh, hairobb__ray_state *rs, int any_hit) __attribute__((target("avx2")));
@@ -6550,7 +6614,7 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 }
 
 /* ------------------------------------------------------------------------ */
-/* Runtime dispatch: the kernels once more, for AVX2                         */
+/* >>dispatch  Runtime dispatch: the kernels once more, for AVX2            */
 /* ------------------------------------------------------------------------ */
 /* The file includes itself (HAIROBB_SELF, found first in its own directory)
    with every name the kernels define suffixed _avx2: a name missing here is
@@ -6659,7 +6723,7 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #endif /* HAIROBB_IMPLEMENTATION_DONE || HAIROBB__KERNEL_PASS */
 #endif /* HAIROBB_IMPLEMENTATION */
 
-/*
+/* >>licence
 ------------------------------------------------------------------------------
 This software is available under 2 licenses -- choose whichever you prefer.
 ------------------------------------------------------------------------------
