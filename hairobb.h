@@ -764,9 +764,9 @@ static void *hairobb__malloc_large(size_t bytes, void *user)
 /* ------------------------------------------------------------------------ */
 #ifndef HAIROBB_NODE_WIDTH             /* children per node: 4 or 8 */
 #if HAIROBB__AVX || HAIROBB__DISPATCH
-/* one AVX register per node test. Measured (bench, combed 200k, primary
-   rays, 1 thread): AVX2 traces 8-wide trees 14% faster than 4-wide, SSE2
-   9% slower; CPUs without AVX2 are few. */
+/* one AVX register per node test: with AVX2, 8-wide trees traced faster
+   than 4-wide, with SSE2 slower (the bench, combed fur); CPUs without
+   AVX2 are few. */
 #define HAIROBB_NODE_WIDTH 8
 #else
 #define HAIROBB_NODE_WIDTH 4
@@ -785,8 +785,8 @@ static void *hairobb__malloc_large(size_t bytes, void *user)
 #define HAIROBB__MAX_THREADS 256u
 #define HAIROBB__MAX_SPLIT_BUDGET 4.0f
 /* A range a full node could not split further becomes a leaf, not a node of
-   its own, up to this many segments: -35% memory at equal or better speed
-   (combed, straight.hair, furBall_A). */
+   its own, up to this many segments: a third less memory at equal or
+   better speed (combed, straight.hair, furBall_A). */
 #define HAIROBB__FULL_NODE_LEAF (HAIROBB__W == 8 ? 3u : 2u)
 #define HAIROBB__BINS 16
 #define HAIROBB__MAX_PIECES 16
@@ -799,11 +799,11 @@ static void *hairobb__malloc_large(size_t bytes, void *user)
 /* The per-child compressed layout keeps float boxes in AABB nodes (the top
    of the tree) and in OBB nodes over more than this many references: every
    ray passes there, and they are few (combed, straight.hair, furBall_A:
-   +5-10% primary-ray speed for +0.4-0.7 bytes per segment). */
+   faster primary rays for under a byte per segment). */
 #define HAIROBB__FLOAT_NODES 256
 #define HAIROBB__TASKS 64               /* about this many subtrees are built as tasks (threads) */
 #define HAIROBB__TASK_MIN 1024          /* of at least this many references, unless the input is smaller */
-#define HAIROBB__SAMPLE 16              /* segments sampled to rank hair-space candidates: 64 built 7% slower, traced the same */
+#define HAIROBB__SAMPLE 16              /* segments sampled to rank hair-space candidates: 64 built slower, traced the same */
 #endif
 /* Relative costs of testing one child box and intersecting one segment.
    OBB over AABB is measured: callgrind, instructions per node visit, 8-wide,
@@ -2291,6 +2291,60 @@ static void hairobb__bin_part(void *context, unsigned k)
     hairobb__bin_boxes(w->boxes + 6 * begin, end - begin, w->bins, w->origin, w->scale, &w->binned[k]);
 }
 
+/* The spatial split along one axis (of frame, NULL = world axes) of the
+   range's box [bmin, bmax], taken into *best if it is cheaper and clips at
+   most spatial_slack references. */
+static void hairobb__spatial_bins(const hairobb__builder *b, const hairobb__range *r, const float *frame, int axis, int bins,
+                                  const float bmin[3], const float bmax[3], float box_cost, size_t spatial_slack,
+                                  hairobb__split *best)
+{
+    size_t i;
+    float bin_lower[HAIROBB__BINS][3], bin_upper[HAIROBB__BINS][3];
+    float scale = hairobb__bin_scale(bins, bmax[axis] - bmin[axis]);
+    size_t bin_count[HAIROBB__BINS], exits[HAIROBB__BINS];
+    int bin;
+    if (scale > 0.0f) {
+        /* each reference enters the bin of its lower end and leaves by that of
+           its upper end; in between, its box clipped to each bin's slab is
+           what it adds there (an upper bound of its clipped curve) */
+        hairobb__split before = *best;
+        for (bin = 0; bin < bins; ++bin) {
+            hairobb__box_empty(bin_lower[bin], bin_upper[bin]);
+            bin_count[bin] = exits[bin] = 0;
+        }
+        for (i = r->begin; i < r->end; ++i) {
+            float lower[3], upper[3];
+            int first, last;
+            hairobb__box_at(b, frame, i, lower, upper);
+            first = hairobb__bin_of(lower[axis], bmin[axis], scale);
+            last = hairobb__bin_of(upper[axis], bmin[axis], scale);
+            bin_count[first]++;
+            exits[last]++;
+            for (bin = first; bin <= last; ++bin) {
+                float lo[3], hi[3];
+                memcpy(lo, lower, sizeof lo);
+                memcpy(hi, upper, sizeof hi);
+                if (bin > first) lo[axis] = bmin[axis] + (float)bin / scale;
+                if (bin < last) hi[axis] = bmin[axis] + (float)(bin + 1) / scale;
+                hairobb__box_grow(bin_lower[bin], bin_upper[bin], lo, hi);
+            }
+        }
+        hairobb__sweep_bins(bins, (const float (*)[3])bin_lower, (const float (*)[3])bin_upper, bin_count, exits,
+                            box_cost, HAIROBB__SPLIT_SPATIAL, frame, axis, bmin[axis], scale, best);
+        if (best->cost < before.cost) {
+            /* the budget: count the references straddling the chosen plane */
+            size_t straddling = 0;
+            for (i = r->begin; i < r->end; ++i) {
+                float lower[3], upper[3];
+                hairobb__box_at(b, frame, i, lower, upper);
+                if (hairobb__bin_of(lower[axis], bmin[axis], scale) <= best->last_left_bin &&
+                    hairobb__bin_of(upper[axis], bmin[axis], scale) > best->last_left_bin) ++straddling;
+            }
+            if (straddling > spatial_slack) *best = before;   /* over budget: forget it */
+        }
+    }
+}
+
 /* Best SAH split of the range binned along the axes of frame (NULL = world
    axes): by centroid (object split) and, with spatial_slack > 0, by
    clipping references at the bin planes (spatial split) when at most
@@ -2387,52 +2441,8 @@ static void hairobb__bin_split(const hairobb__builder *b, const hairobb__range *
             }
         }
     }
-    for (axis = 0; axis < 3 && spatial_slack > 0; ++axis) {
-        float bin_lower[HAIROBB__BINS][3], bin_upper[HAIROBB__BINS][3];
-        float scale = hairobb__bin_scale(bins, bmax[axis] - bmin[axis]);
-        size_t bin_count[HAIROBB__BINS], exits[HAIROBB__BINS];
-        int bin;
-        if (scale > 0.0f) {
-            /* each reference enters the bin of its lower end and leaves by that of
-               its upper end; in between, its box clipped to each bin's slab is
-               what it adds there (an upper bound of its clipped curve) */
-            hairobb__split before = *best;
-            for (bin = 0; bin < bins; ++bin) {
-                hairobb__box_empty(bin_lower[bin], bin_upper[bin]);
-                bin_count[bin] = exits[bin] = 0;
-            }
-            for (i = r->begin; i < r->end; ++i) {
-                float lower[3], upper[3];
-                int first, last;
-                hairobb__box_at(b, frame, i, lower, upper);
-                first = hairobb__bin_of(lower[axis], bmin[axis], scale);
-                last = hairobb__bin_of(upper[axis], bmin[axis], scale);
-                bin_count[first]++;
-                exits[last]++;
-                for (bin = first; bin <= last; ++bin) {
-                    float lo[3], hi[3];
-                    memcpy(lo, lower, sizeof lo);
-                    memcpy(hi, upper, sizeof hi);
-                    if (bin > first) lo[axis] = bmin[axis] + (float)bin / scale;
-                    if (bin < last) hi[axis] = bmin[axis] + (float)(bin + 1) / scale;
-                    hairobb__box_grow(bin_lower[bin], bin_upper[bin], lo, hi);
-                }
-            }
-            hairobb__sweep_bins(bins, (const float (*)[3])bin_lower, (const float (*)[3])bin_upper, bin_count, exits,
-                                box_cost, HAIROBB__SPLIT_SPATIAL, frame, axis, bmin[axis], scale, best);
-            if (best->cost < before.cost) {
-                /* the budget: count the references straddling the chosen plane */
-                size_t straddling = 0;
-                for (i = r->begin; i < r->end; ++i) {
-                    float lower[3], upper[3];
-                    hairobb__box_at(b, frame, i, lower, upper);
-                    if (hairobb__bin_of(lower[axis], bmin[axis], scale) <= best->last_left_bin &&
-                        hairobb__bin_of(upper[axis], bmin[axis], scale) > best->last_left_bin) ++straddling;
-                }
-                if (straddling > spatial_slack) *best = before;   /* over budget: forget it */
-            }
-        }
-    }
+    for (axis = 0; axis < 3 && spatial_slack > 0; ++axis)
+        hairobb__spatial_bins(b, r, frame, axis, bins, bmin, bmax, box_cost, spatial_slack, best);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -2854,7 +2864,7 @@ typedef struct hairobb__child {
 } hairobb__child;
 
 /* The serial top of the tree's share of the progress fraction: about its
-   share of a one-thread build's instructions (session 6 profile: 19%). */
+   share of a one-thread build's instructions (callgrind: about a fifth). */
 #define HAIROBB__TOP_SHARE 0.2
 
 /* Reports progress (on the calling thread, where task_limit is set): the
@@ -5752,8 +5762,8 @@ static const float *hairobb__made_moving(const hairobb_bvh *bvh, uint32_t prim, 
    at time (a ray's; unused by static BVHs): every traversal path reads a
    segment through here. Static points of another basis are converted
    inline: out of line, or through a pointer to a function per basis,
-   they cost more instructions and more time (the README's paragraph on
-   bases without the copy). scratch: room for points made on the fly. */
+   they cost more instructions and more time (callgrind and the bench's
+   rounds). scratch: room for points made on the fly. */
 HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
 {
     /* likely: the default's layout, the other paths out of its way */
@@ -6401,7 +6411,7 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
 
 /* One segment: moved into ray space and culled by its control polygon (the
    ribbon lies in its hull dilated by the largest radius), then the pieces.
-   (Culling 4 segments at once with SIMD measured 10% slower: leaves hold
+   (Culling 4 segments at once with SIMD measured slower: leaves hold
    about one segment.) Inlined into the leaf loop: out of line, its frame's
    set-up and tear-down cost 47 of combed's 2,371 instructions a ray. */
 HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint32_t prim, int any_hit)
