@@ -1,78 +1,153 @@
 /* hairobb.h - v0.1.0 - ray tracing of hair and fur with a mixed AABB/OBB BVH
    single-file C library, public domain or MIT (see the end of the file)
 
-   WHAT IT DOES
-     Builds a 4-wide (or 8-wide) bounding volume hierarchy over cubic Bezier
-     hair segments and intersects rays with them. Groups of neighbouring
-     hairs point the same way, so boxes oriented along the hair ("hair space")
-     bound them far more tightly than axis-aligned boxes; the builder decides
-     per node, by the surface area heuristic, whether an axis-aligned (AABB)
-     or an oriented (OBB) node pays (Woop, Benthin, Wald, Johnson, Tabellion,
-     HPG 2014). Nodes are stored compressed (byte rotations and byte boxes:
-     33-35 bytes per segment on real hair), the build runs on all cores, and
-     spatial splits and similar-orientation clustering are available as
-     options.
+   Builds a 4-wide (or 8-wide) bounding volume hierarchy over cubic hair
+   segments and intersects rays with them exactly. Groups of neighbouring
+   hairs point the same way, so boxes oriented along the hair ("hair
+   space") bound them far more tightly than axis-aligned boxes; the builder
+   decides per node, by the surface area heuristic, whether an axis-aligned
+   (AABB) or an oriented (OBB) node pays (Woop, Benthin, Wald, Johnson,
+   Tabellion, HPG 2014). Nodes are stored compressed (byte rotations and
+   byte boxes), the build runs on all cores, and the buffers are Embree's
+   curve buffers. Speed, memory and accuracy figures are in README.md and
+   docs/, each from a named run; this manual describes behaviour.
 
-   HOW TO USE
+   MANUAL
+      1. QUICK START
+      2. API MAP
+      3. CONFIGURATION MACROS
+      4. INPUT and MEMORY LIFETIME
+      5. THE SURFACE
+      6. HITS
+      7. BUILD OPTIONS
+      8. THREADS and BUILD MEMORY
+      9. REFIT
+     10. MOTION BLUR
+     11. .hair FILES
+     12. SAVE AND LOAD
+     13. SIMD PATHS
+     14. THREAD SAFETY
+     15. ERRORS
+     16. SECTIONS OF THIS FILE
+   Stop after 2 if you only want the API; each declaration below the manual
+   says what it takes and returns.
+
+
+   1. QUICK START
+   --------------
      In exactly one C or C++ file:
          #define HAIROBB_IMPLEMENTATION
          #include "hairobb.h"
      Everywhere else just #include "hairobb.h".
 
-     float    vertices[] = { x,y,z,radius, x,y,z,radius, ... };   // 4 per segment
-     uint32_t indices[]  = { 0, 4, 8, ... };         // first control point of each segment
+     float    vertices[] = { x,y,z,radius, x,y,z,radius, ... };  // 4 floats a control point
+     uint32_t indices[]  = { 0, 4, 8, ... };          // first control point of each segment
      hairobb_bvh *bvh;
      hairobb_result res = hairobb_build(vertices, vertex_count, indices, segment_count,
-                                        NULL, &bvh);          // NULL: default options
+                                        NULL, &bvh);           // NULL: default options
      if (res != HAIROBB_OK) { puts(hairobb_result_string(res)); return 1; }
-     hairobb_ray ray = { {0,0,-5}, 0.0f, {0,0,1}, INFINITY, 0.0f };
+     hairobb_ray ray = { {0,0,-5}, 0.0f, {0,0,1}, INFINITY, 0.0f };  // org, tnear, dir, tfar, time
      hairobb_hit hit;
      if (hairobb_intersect1(bvh, &ray, &hit)) printf("segment %u at t=%g\n", hit.prim_id, hit.t);
      hairobb_free(bvh);
 
-   INPUT
-     The vertex and index layout is Embree's curve layout, so a renderer can hand
-     the same buffers to either library: vertices are 4 floats per control point
-     (x, y, z, radius), indices[i] is the first of the 4 consecutive control
-     points of segment i. Position and radius are cubic Bezier curves in u.
-     No alignment is required.
+     A zero-initialised hairobb_build_options means the defaults. Keep
+     vertices and indices alive and unchanged until hairobb_free (MEMORY
+     LIFETIME). A .hair file gives the same buffers (.hair FILES):
+         hairobb_hair hair;
+         hairobb_hair_load("straight.hair", NULL, &hair);
+         hairobb_build(hair.vertices, hair.vertex_count, hair.indices, hair.segment_count,
+                       NULL, &bvh);
+         ... trace ..., hairobb_free(bvh), then hairobb_hair_free(&hair).
+
+
+   2. API MAP
+   ----------
+     Build and free
+       hairobb_build            a BVH over the caller's segments (options may be NULL)
+       hairobb_free             frees a BVH (NULL is ignored)
+     Trace
+       hairobb_intersect1       the nearest hit in [tnear, tfar], or a miss
+       hairobb_occluded1        whether anything is hit in [tnear, tfar]; stops at the first hit
+       hairobb_intersect1_from  a secondary ray leaving an earlier hit (HITS)
+       hairobb_occluded1_from   a shadow ray leaving an earlier hit (HITS)
+     Move the hair
+       hairobb_refit            the same segments at new positions (REFIT)
+       hairobb_refit_tangents   the same for Hermite segments, with new tangents
+       hairobb_refit_motion     new arrays for every time step of a moving BVH (MOTION BLUR)
+     Save and load (SAVE AND LOAD)
+       hairobb_save_size        the bytes hairobb_save writes
+       hairobb_save             the BVH into a buffer
+       hairobb_load             a BVH from saved bytes, over the same hair
+       hairobb_save_file        hairobb_save into a file (not with HAIROBB_NO_STDIO)
+       hairobb_load_file        hairobb_load from a file (not with HAIROBB_NO_STDIO)
+     .hair files (.hair FILES)
+       hairobb_hair_read        Cem Yuksel's format from memory
+       hairobb_hair_load        the same from a file (not with HAIROBB_NO_STDIO)
+       hairobb_hair_free        frees what the two above allocated
+     Inspect
+       hairobb_memory_bytes     every byte the BVH allocated
+       hairobb_get_stats        node and leaf counts, depth, bytes, SAH cost now and as built
+       hairobb_bounds           the bounds of all ribbons, radius included
+       hairobb_get_simd         the instruction set the BVH traces with (SIMD PATHS)
+       hairobb_simd_string      its name
+       hairobb_result_string    the name of a result code (ERRORS)
+
+
+   3. CONFIGURATION MACROS
+   -----------------------
+     Define before including the implementation.
+     HAIROBB_MALLOC(size, user), HAIROBB_FREE(ptr, user)   allocation; define
+                             both or neither. user = options->allocator_user.
+     HAIROBB_ASSERT(x)       internal checks, default assert().
+     HAIROBB_STATIC          make every function static to the including file.
+     HAIROBB_NO_SIMD         plain C everywhere (same answers as the SIMD paths).
+     HAIROBB_NO_STDIO        leave out hairobb_hair_load, hairobb_save_file and
+                             hairobb_load_file (no <stdio.h>).
+     HAIROBB_NO_THREADS      build on the calling thread only. Otherwise, on
+                             POSIX systems, the build uses pthreads: link
+                             with -pthread (glibc 2.34 and later need nothing).
+                             Elsewhere the build runs on the calling thread,
+                             or on options.parallel_for.
+     HAIROBB_NO_DISPATCH     no AVX2 copy of the kernels (SIMD PATHS).
+     HAIROBB_NO_HUGE_PAGES   no madvise(MADV_HUGEPAGE). Otherwise, on Linux
+                             where <sys/mman.h> declares it (glibc or musl
+                             with _DEFAULT_SOURCE or _GNU_SOURCE, as C++ and
+                             gcc's gnu modes have; not strict -std=c99 alone),
+                             blocks of 4 MB and more that a build or a load
+                             allocates (node memory, leaf ids, the build's
+                             per-segment arrays) are advised to take 2 MB
+                             pages where the kernel has transparent huge
+                             pages in its "madvise" mode: far fewer page
+                             faults while a build first writes them.
+     HAIROBB_SELF            the file's name as the runtime dispatch includes
+                             it again, default "hairobb.h".
+     HAIROBB_NODE_WIDTH      children per node, 4 or 8; default 8 where the
+                             compiler targets AVX or the AVX2 copy is
+                             compiled in, else 4.
+
+
+   4. INPUT and MEMORY LIFETIME
+   ----------------------------
+     INPUT: the vertex and index layout is Embree's curve layout, so a
+     renderer can hand the same buffers to either library: vertices are 4
+     floats per control point (x, y, z, radius), indices[i] is the first of
+     the 4 consecutive control points of segment i. Position and radius are
+     cubic Bezier curves in u. No alignment is required. Other curve bases
+     (B-spline, Catmull-Rom, Hermite, linear) are options.basis
+     (BUILD OPTIONS). Coordinates must be finite and at most 1e18 in
+     magnitude, radii at least 0 (ERRORS).
 
      MEMORY LIFETIME: the BVH keeps pointers to the caller's vertex and index
      arrays and reads them while tracing (it copies nothing the caller already
      holds). They must stay alive and unchanged until hairobb_free; to move
-     the hair, refit (REFIT) or build again. Other curve bases (`basis`)
-     are copied, unless bezier_copy is OFF (then kept, tangents too).
+     the hair, refit (REFIT) or build again. Other curve bases are copied
+     in Bezier form, unless bezier_copy is OFF (then the caller's arrays,
+     tangents too, are kept and must live as long).
 
-   REFIT
-     hairobb_refit(bvh, new_vertices) moves a built BVH to new positions
-     and radii of the same segments (same indices and vertex_count, on the
-     build's threads or parallel_for): the topology, the leaves and every
-     node's frame stay as built, and every child box is written again, by
-     the builder's own code, from the control points of the segments below
-     it (clipped parts of spatial splits keep their u ranges), so it is as
-     tight as a build's in those frames, and a refit to the build's
-     positions gives back the build's bytes. Bad vertices (as the build
-     checks them) return an error before anything is written. Bezier
-     input: the BVH keeps the new pointer. Other bases keep a copy of the
-     caller's indices (72 bytes per segment in all) and convert the new
-     points again; Hermite takes new tangents with hairobb_refit_tangents.
-     Cost: callgrind, combed 200k, 1 thread, the default layout: about
-     1,160 instructions per segment against the build's 9,250 (12.5%).
-     The frames suit the pose they were chosen for: hairobb_get_stats
-     gives the tree's SAH cost now (sah_cost) and as built
-     (build_sah_cost); rebuild when their ratio passes a threshold of your
-     choosing.
 
-     BUILD MEMORY: beyond the BVH it returns, a build holds 28 bytes a
-     segment while it runs (ids and world boxes; 36 a reference with
-     spatial splits, whose budget adds spatial_split_budget references a
-     segment), 24 bytes a reference of the subtree each thread builds, and
-     the subtrees' nodes, which it holds twice at the end as it copies them
-     into one block. Measured (bench, README) on combed fur, 8-wide
-     defaults: 32-34 bytes a segment beyond the BVH at 200k-10M segments,
-     42 with spatial splits.
-
-   THE SURFACE
+   5. THE SURFACE
+   --------------
      Each segment is a ray-facing ribbon (Embree's "flat" curve). In ray space
      (origin at the ray origin, z along the normalised direction) let P(u) and
      r(u) be the segment's position and radius and P2 = (x, y) the projection.
@@ -90,8 +165,27 @@
      along dir. The default intersector finds the roots of dot(P2, P2') with a
      bracketed Newton iteration after a conservative test against 8 linear
      pieces, so its hits agree with this definition up to float rounding.
+     docs/accuracy.md says how that is measured.
 
-   BUILD OPTIONS (hairobb_build_options; a zero-initialised struct = defaults)
+
+   6. HITS
+   -------
+     hairobb_hit: t, u, v as above; Ng the ribbon's unit normal facing the ray
+     origin; tangent = P'(u) in world space; prim_id the segment index.
+     (Embree's flat curves report v in [0, 1] and the tangent as Ng.)
+     Every hit with t in [tnear, tfar] counts, including the ribbon a
+     secondary ray starts on. Trace secondary rays with
+     hairobb_intersect1_from / hairobb_occluded1_from, giving the hit they
+     leave: they start at org + hit.t * dir with tnear = 0 and skip the
+     ribbon they start on, its segment and the segments joined to its ends,
+     within 2 radii (Embree drops every hit with t <= 2 r / |dir|, other
+     hairs included; here other hairs in contact still cast shadows).
+     An any-hit filter (options.hit_filter) sees each hit before it is
+     taken: transparent hair, shadow rays through opacity.
+
+
+   7. BUILD OPTIONS (hairobb_build_options; a zero-initialised struct = defaults)
+   ----------------
      nodes                   HAIROBB_NODES_MIXED (default): AABB or OBB per node
                              by SAH; _AABB_ONLY and _OBB_ONLY for comparisons.
      obb_layout              HAIROBB_OBB_DEFAULT = _COMPRESSED_PER_CHILD: each
@@ -107,15 +201,16 @@
                              _SHARED_ROTATION: one float rotation per node
                              (304/176 bytes). _COMPRESSED: the paper's
                              compressed node, one byte rotation shared by the
-                             children (160/96 bytes). The bench (README)
-                             compares their bytes per segment and speed:
-                             the default takes well under half the bytes
-                             of _PER_CHILD and traced as fast in the
-                             latest runs.
+                             children (160/96 bytes). The default takes well
+                             under half the bytes of _PER_CHILD and traces
+                             about as fast; one rotation shared by all
+                             children bounds them more loosely and traces
+                             slower (docs/design.md, docs/benchmarking.md).
      spatial_splits          HAIROBB_AUTO (= off), _ON, _OFF: also try split
                              planes that clip segments (world and hair space);
                              a clipped segment is referenced by the leaves of
-                             both sides.
+                             both sides. Off by default: on real hair it wins
+                             few splits and costs build time and memory.
      spatial_split_budget    extra references spatial splits may add, as a
                              fraction of the segment count: 0 = 0.25, at most 4.
      clustering              HAIROBB_AUTO (= off), _ON, _OFF: also try splitting
@@ -124,9 +219,9 @@
                              a subtree where they lost 3 splits in a row.
      max_leaf_size           segments per leaf at most, 0 = 4, at most 15.
      hair_space_candidates   rotations tried per split (main directions of
-                             sampled segments), 0 = 2, at most 16. The paper's
-                             4 traced within 0.5% of 2 (callgrind, combed,
-                             straight.hair, furBall_A) and built 10% slower.
+                             sampled segments), 0 = 2, at most 16. More
+                             candidates build slower; the paper's 4 traced
+                             no faster than 2.
      curve_pieces            linear pieces per segment in the intersector's
                              first test, 0 = 8, at most 16 (with the exact
                              precision it changes speed, not the hits).
@@ -142,28 +237,9 @@
                              a nonzero return cancels:
                              HAIROBB_ERROR_CANCELLED.
      threads                 0 (default): one build thread per core; 1: the
-                             calling thread only; at most 256. Every thread
-                             count builds the same tree (the top levels on
-                             the calling thread, independent subtrees on
-                             the other threads as the top makes them, then
-                             on all of them; the first pass over every
-                             segment, and the last one that gathers the
-                             subtrees, on all of them in parts).
+                             calling thread only; at most 256 (THREADS).
      parallel_for, _user     a renderer's task system instead of the
-                             library's threads (`threads` is then unused;
-                             works with HAIROBB_NO_THREADS too): the
-                             independent subtrees (tens to hundreds) go to
-                             parallel_for(user, count, run, context) as
-                             one call of run(context, i) each, once the
-                             top is built (it takes a count, so the
-                             subtrees cannot start while the top runs, as
-                             they do on the library's threads). The first
-                             and last passes (see threads) call it too,
-                             before the top and after the subtrees. The
-                             same tree again. While they run, progress is
-                             not reported and a cancel waits for their end.
-                             A parallel_for that skips an index gives
-                             HAIROBB_ERROR_INVALID_ARGUMENT.
+                             library's threads (THREADS).
      basis, tangents         HAIROBB_BASIS_BEZIER (default) reads 4 control
                              points from indices[i]. _BSPLINE, _CATMULL_ROM
                              (4 points), _HERMITE (2 points, their
@@ -182,19 +258,19 @@
                              which must then outlive the BVH as Bezier
                              input's do, converting a segment each time one
                              is read: no bytes per segment besides nodes and
-                             leaves (combed, Catmull-Rom: 28 B/segment in
-                             all, against 100 with the copy), for ~15% more
-                             instructions a ray (callgrind, combed primary
-                             2262 against 1948) and ~44% more a build. Both
-                             give the same tree and bit-identical hits.
+                             leaves, for a few percent more instructions a
+                             ray and a build (docs/benchmarking.md). Both
+                             give the same tree and bit-identical hits. The
+                             copy stays the default because without it the
+                             caller's arrays must outlive the BVH.
      hit_filter, _user       hit_filter(user, ray, hit) for each hit found
                              in [tnear, tfar] (nearer than the best so far
                              for intersect1, any for occluded1), on the
                              tracing thread, before it is taken: 0 ignores
                              it. A ray within rounding of a strand's joint
                              may show it the joint on both segments. NULL
-                             (default): +0.4-0.5% instructions per ray,
-                             below timing noise (callgrind, bench).
+                             (default): every hit counts; an unset filter
+                             costs next to nothing.
      simd                    HAIROBB_SIMD_AUTO (default): the widest path
                              the build has and the CPU runs (SIMD PATHS);
                              a path named forces it (comparisons, tests),
@@ -204,8 +280,61 @@
      verify_hair             hairobb_load only (SAVE AND LOAD): HAIROBB_AUTO
                              (default) and _ON compare the hair with the
                              saved hash, _OFF skips that pass.
+     time_steps, time_vertices  motion blur (MOTION BLUR); 0: static hair.
 
-   MOTION BLUR
+
+   8. THREADS and BUILD MEMORY
+   ---------------------------
+     THREADS: every thread count builds the same tree. The top levels are
+     built on the calling thread; the independent subtrees below them (about
+     64, from the input size alone) go to the other threads as the top makes
+     them, then to all of them. The first pass over every segment, and the
+     last one that gathers the subtrees, run on all threads in parts.
+     With options.parallel_for (works with HAIROBB_NO_THREADS too;
+     `threads` is then unused) the subtrees go to
+     parallel_for(user, count, run, context) as one call of run(context, i)
+     each, once the top is built (it takes a count, so the subtrees cannot
+     start while the top runs, as they do on the library's threads). The
+     first and last passes call it too, before the top and after the
+     subtrees. The same tree again. While they run, progress is not
+     reported and a cancel waits for their end. A parallel_for that skips
+     an index gives HAIROBB_ERROR_INVALID_ARGUMENT.
+
+     BUILD MEMORY: beyond the BVH it returns, a build holds 28 bytes a
+     segment while it runs (ids and world boxes; 36 a reference with
+     spatial splits, whose budget adds spatial_split_budget references a
+     segment), 24 bytes a reference of the subtree each thread builds, a
+     copy of that subtree's points in Bezier form (72 bytes a reference),
+     and the subtrees' nodes, which it holds twice at the end as it copies
+     them into one block. So its peak beyond the BVH is about the BVH's own
+     size again for the default layouts (docs/benchmarking.md has the
+     measured figures).
+
+
+   9. REFIT
+   --------
+     hairobb_refit(bvh, new_vertices) moves a built BVH to new positions
+     and radii of the same segments (same indices and vertex_count, on the
+     build's threads or parallel_for): the topology, the leaves and every
+     node's frame stay as built, and every child box is written again, by
+     the builder's own code, from the control points of the segments below
+     it (clipped parts of spatial splits keep their u ranges), so it is as
+     tight as a build's in those frames, and a refit to the build's
+     positions gives back the build's bytes. Bad vertices (as the build
+     checks them) return an error before anything is written. Bezier
+     input: the BVH keeps the new pointer. Other bases keep a copy of the
+     caller's indices (72 bytes per segment in all) and convert the new
+     points again; Hermite takes new tangents with hairobb_refit_tangents.
+     A refit costs a fraction of a build (docs/benchmarking.md).
+     The frames suit the pose they were chosen for: hairobb_get_stats
+     gives the tree's SAH cost now (sah_cost) and as built
+     (build_sah_cost); rebuild when their ratio passes a threshold of your
+     choosing. The ratio tracks the speed a refitted tree loses against a
+     fresh build.
+
+
+  10. MOTION BLUR
+  ---------------
      options.time_steps = T >= 2 and options.time_vertices (T pointers to
      arrays of vertex_count control points, the same indices) describe
      moving hair: step k is the hair at time k / (T - 1). The surface at a
@@ -237,19 +366,9 @@
      options.time_steps and time_vertices, and the hash covers every step;
      another T is HAIROBB_ERROR_MISMATCH).
 
-   HITS
-     hairobb_hit: t, u, v as above; Ng the ribbon's unit normal facing the ray
-     origin; tangent = P'(u) in world space; prim_id the segment index.
-     (Embree's flat curves report v in [0, 1] and the tangent as Ng.)
-     Every hit with t in [tnear, tfar] counts, including the ribbon a
-     secondary ray starts on. Trace secondary rays with
-     hairobb_intersect1_from / hairobb_occluded1_from, giving the hit they
-     leave: they start at org + hit.t * dir with tnear = 0 and skip the
-     ribbon they start on, its segment and the segments joined to its ends,
-     within 2 radii (Embree drops every hit with t <= 2 r / |dir|, other
-     hairs included; here other hairs in contact still cast shadows).
 
-   .hair FILES
+  11. .hair FILES
+  ---------------
      hairobb_hair_load(path, allocator_user, &hair) (or hairobb_hair_read
      from memory) reads Cem Yuksel's format: the file's arrays (points with
      radius = thickness / 2, strand lengths, colours and transparency where
@@ -260,7 +379,9 @@
      disagree is HAIROBB_ERROR_INVALID_FILE; NaN, Inf or negative thickness
      HAIROBB_ERROR_INVALID_GEOMETRY.
 
-   SAVE AND LOAD
+
+  12. SAVE AND LOAD
+  -----------------
          size_t size = hairobb_save_size(bvh);
          void *bytes = malloc(size);
          hairobb_save(bvh, bytes, size);                  // or hairobb_save_file(bvh, path)
@@ -275,7 +396,7 @@
      every other setting (layout, policy, precision, curve pieces, leaf
      size) is the saved BVH's. Curves of other bases are not saved (72
      bytes per segment): the load converts the caller's arrays again, with
-     the build's code.
+     the build's code. A load is many times faster than a build.
      The format: a header (magic, format version, byte-order word, node
      width, the build's options, counts, a 64-bit hash of the Bezier
      segments traced), the node memory, the leaves' segment ids (and the u
@@ -306,57 +427,66 @@
      segments, and the walk bounds what a traversal reads); the bounds
      hairobb_bounds reports must be finite.
 
-   SIMD PATHS
+
+  13. SIMD PATHS
+  --------------
      The traversal and intersector exist in plain C, SSE2, SSE4.1, AVX and
      AVX2 versions, which give the same hits bit for bit (no FMA). The
      compiler's target picks one (-msse4.1, -mavx2, -march=...). Where that
      target lacks AVX2, gcc 5+ and clang 4+ on x86 compile the kernels a
      second time for AVX2 (target pragmas; no flag needed), and
      hairobb_build picks them where the CPU runs AVX2: a plain `cc -O2`
-     build traced within 2% of -march=native, 1.55x faster than the same
-     build without the AVX2 copy (bench, README). For that the file
-     includes itself by its name: keep it hairobb.h, or define HAIROBB_SELF.
-     HAIROBB_NO_DISPATCH turns the second copy off. There is no AVX-512
-     path.
+     build then traces about as fast as one for the CPU, and much faster
+     than its SSE2 path. For that the file includes itself by its name:
+     keep it hairobb.h, or define HAIROBB_SELF. HAIROBB_NO_DISPATCH turns
+     the second copy off. There is no AVX-512 path, and no SIMD path off
+     x86 (plain C runs there).
 
-   THREAD SAFETY
-     hairobb_intersect1/hairobb_occluded1 only read the BVH: any number of
-     threads may trace one BVH at once; hairobb_refit writes it (no tracing
-     meanwhile). There is no global state.
 
-   CONFIGURATION MACROS (define before including the implementation)
-     HAIROBB_MALLOC(size, user), HAIROBB_FREE(ptr, user)   allocation; define
-                             both or neither. user = options->allocator_user.
-     HAIROBB_ASSERT(x)       internal checks, default assert().
-     HAIROBB_STATIC          make every function static to the including file.
-     HAIROBB_NO_SIMD         plain C everywhere (same answers as the SIMD paths).
-     HAIROBB_NO_STDIO        leave out hairobb_hair_load, hairobb_save_file and
-                             hairobb_load_file (no <stdio.h>).
-     HAIROBB_NO_THREADS      build on the calling thread only. Otherwise, on
-                             POSIX systems, the build uses pthreads: link
-                             with -pthread (glibc 2.34 and later need nothing).
-     HAIROBB_NO_DISPATCH     no AVX2 copy of the kernels (SIMD PATHS).
-     HAIROBB_NO_HUGE_PAGES   no madvise(MADV_HUGEPAGE). Otherwise, on Linux
-                             where <sys/mman.h> declares it (glibc or musl
-                             with _DEFAULT_SOURCE or _GNU_SOURCE, as C++ and
-                             gcc's gnu modes have; not strict -std=c99 alone),
-                             blocks of 4 MB and more that a build or a load
-                             allocates (node memory, leaf ids, the build's
-                             per-segment arrays) are advised to take 2 MB
-                             pages where the kernel has transparent huge
-                             pages in its "madvise" mode: far fewer page
-                             faults while a build first writes them. Embree's
-                             BVH memory takes such pages too.
-     HAIROBB_SELF            the file's name as the runtime dispatch includes
-                             it again, default "hairobb.h".
-     HAIROBB_NODE_WIDTH      children per node, 4 or 8; default 8 where the
-                             compiler targets AVX or the AVX2 copy is
-                             compiled in, else 4.
+  14. THREAD SAFETY
+  -----------------
+     hairobb_intersect1/hairobb_occluded1 (and the _from variants) only
+     read the BVH: any number of threads may trace one BVH at once;
+     hairobb_refit writes it (no tracing meanwhile). There is no global
+     state.
 
-   ERRORS
-     hairobb_build, hairobb_load and the readers return a hairobb_result;
-     hairobb_result_string names it.
-     The library never prints and never exits.
+
+  15. ERRORS
+  ----------
+     hairobb_build, hairobb_load, the refits and the readers return a
+     hairobb_result; hairobb_result_string names it. On failure nothing is
+     left allocated, and a refit leaves the BVH as it was. Validation
+     (INVALID_GEOMETRY, INDEX_OUT_OF_RANGE, TOO_LARGE) comes before any
+     large allocation. The library never prints and never exits.
+
+
+  16. SECTIONS OF THIS FILE
+  -------------------------
+     The implementation follows the data's path. Grep for these anchors
+     (docs/design.md walks through them):
+       >>api             the declarations below this manual
+       >>platform        includes, threads, huge pages, the dispatch's self-include
+       >>defaults        limits, named default constants, options resolved once, the SAH cost model
+       >>vector          small vector and 4-lane helpers
+       >>input           validation, other curve bases
+       >>hair_file       the .hair reader
+       >>hair_space      frames and the choice of a range's hair space
+       >>layouts         node structs and their writers
+       >>bins            binned SAH
+       >>splits          object and spatial splits, clustering
+       >>partition       references to their side of a split
+       >>node_build      filling a node's children
+       >>tasks           subtrees on threads or on parallel_for
+       >>passes          the first and last passes, and hairobb_build
+       >>refit           refit and the SAH cost
+       >>save_load       the saved format and the loader's checks
+       >>rays            what every traversal path reads of a ray
+       >>simd            SIMD wrappers and their plain C twins
+       >>segment_points  a segment's Bezier points as traced
+       >>traversal       node tests and the traversal loop
+       >>intersector     ray/curve intersection and hit attributes
+       >>tracing_api     hairobb_intersect1 and its siblings
+       >>licence         the licence, at the end
 */
 #ifndef HAIROBB_H
 #define HAIROBB_H
@@ -539,7 +669,7 @@ typedef struct hairobb_stats {
     /* SAH cost of the tree (see REFIT), now and as built (equal until a
        refit): a renderer that refits can rebuild when sah_cost /
        build_sah_cost passes a threshold. Computed by hairobb_get_stats from
-       the stored boxes (a walk over the nodes, ~1% of a build's time). */
+       the stored boxes (a walk over the nodes, cheap next to a build). */
     double sah_cost, build_sah_cost;
 } hairobb_stats;
 HAIROBB_DEF void hairobb_get_stats(const hairobb_bvh *bvh, hairobb_stats *stats);
