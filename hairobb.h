@@ -465,27 +465,33 @@
      The implementation follows the data's path. Grep for these anchors
      (docs/design.md walks through them):
        >>api             the declarations below this manual
-       >>platform        includes, threads, huge pages, the dispatch's self-include
-       >>defaults        limits, named default constants, options resolved once, the SAH cost model
-       >>vector          small vector and 4-lane helpers
-       >>input           validation, other curve bases
+       >>implementation  what HAIROBB_IMPLEMENTATION compiles:
+       >>platform        the C library, allocation, instruction sets, threads, huge pages
+       >>defaults        limits, named default constants, the SAH cost model, node references
+       >>vector          small vector helpers
+       >>bvh             the BVH object: what a build or a load fills in
+       >>input           results, options resolved once, validation, curve bases, segment bounds
        >>hair_file       the .hair reader
-       >>hair_space      frames and the choice of a range's hair space
-       >>layouts         node structs and their writers
-       >>bins            binned SAH
-       >>splits          object and spatial splits, clustering
-       >>partition       references to their side of a split
-       >>node_build      filling a node's children
+       >>hair_space      references, the builder's state, frames and the choice of a hair space
+       >>bins            binned SAH: object and spatial bins, world and hair space, in parts
+       >>splits          clustering, node boxes, the cheapest split
+       >>partition       references to their side of a split, clipping
+       >>node_store      node memory, progress, leaves
+       >>layouts         each node layout's struct and writer
+       >>node_build      a node of W children, a range to a subtree
        >>tasks           subtrees on threads or on parallel_for
-       >>passes          the first and last passes, and hairobb_build
+       >>passes          the passes over every segment, and the build's steps
+       >>build_api       hairobb_build, hairobb_free, memory and stats
        >>refit           refit and the SAH cost
        >>save_load       the saved format and the loader's checks
        >>rays            what every traversal path reads of a ray
+       >>kernels         compiled once, and again for AVX2 where dispatched:
        >>simd            SIMD wrappers and their plain C twins
        >>segment_points  a segment's Bezier points as traced
-       >>traversal       node tests and the traversal loop
+       >>traversal       node tests (one helper reads a node) and the traversal loop
        >>intersector     ray/curve intersection and hit attributes
        >>tracing_api     hairobb_intersect1 and its siblings
+       >>dispatch        the kernels' names for their AVX2 copy
        >>licence         the licence, at the end
 */
 #ifndef HAIROBB_H
@@ -904,7 +910,8 @@ static void *hairobb__malloc_large(size_t bytes, void *user)
 #endif
 #define HAIROBB__W HAIROBB_NODE_WIDTH
 /* What a zero (or AUTO) field of hairobb_build_options means: the defaults,
-   set in one place (hairobb__resolve_options). */
+   set in one place (hairobb__resolve_options). The layout and the heuristics
+   are the bench's choice (its ablation, docs/benchmarking.md). */
 #define HAIROBB__DEFAULT_MAX_LEAF 4u
 #define HAIROBB__DEFAULT_CANDIDATES 2u
 #define HAIROBB__DEFAULT_PIECES 8u

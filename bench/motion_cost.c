@@ -1,6 +1,6 @@
 /* motion_cost.c - one motion-blurred build and one pass of primary rays at
    random times, for callgrind: the instructions a ray of the traversal of
-   moving hair (README, "Motion blur"). Public API only, so the same file
+   moving hair (docs/benchmarking.md, motion blur). Public API only, so the same file
    measures any version of the header.
 
      build/motion_cost SEGMENTS MOTION AMOUNT T RES [LAYOUT]
