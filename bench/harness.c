@@ -17,16 +17,22 @@ bench_counts bench_count;
 /* Tracers                                                                  */
 /* ======================================================================== */
 
+/* The harness's ray as hairobb takes it (every ray starts at tnear = 0). */
+static void hairobb_tracer_ray(hairobb_ray *ray, const float org[3], const float dir[3], float tfar, float time)
+{
+    memcpy(ray->org, org, sizeof ray->org);
+    memcpy(ray->dir, dir, sizeof ray->dir);
+    ray->tnear = 0.0f;
+    ray->tfar = tfar;
+    ray->time = time;
+}
+
 static int hairobb_tracer_intersect(const void *accel, const float org[3], const float dir[3], float tfar, float time,
                                     hit_record *out)
 {
     hairobb_ray ray;
     hairobb_hit hit;
-    memcpy(ray.org, org, sizeof ray.org);
-    memcpy(ray.dir, dir, sizeof ray.dir);
-    ray.tnear = 0.0f;
-    ray.tfar = tfar;
-    ray.time = time;
+    hairobb_tracer_ray(&ray, org, dir, tfar, time);
     if (!hairobb_intersect1((const hairobb_bvh *)accel, &ray, &hit)) {
         out->prim = NO_HIT;
         return 0;
@@ -41,11 +47,7 @@ static int hairobb_tracer_intersect(const void *accel, const float org[3], const
 static int hairobb_tracer_occluded(const void *accel, const float org[3], const float dir[3], float tfar, float time)
 {
     hairobb_ray ray;
-    memcpy(ray.org, org, sizeof ray.org);
-    memcpy(ray.dir, dir, sizeof ray.dir);
-    ray.tnear = 0.0f;
-    ray.tfar = tfar;
-    ray.time = time;
+    hairobb_tracer_ray(&ray, org, dir, tfar, time);
     return hairobb_occluded1((const hairobb_bvh *)accel, &ray);
 }
 

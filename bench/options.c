@@ -168,6 +168,9 @@ static void default_options(options *o)
 /* Returns 0 to run, 1 on a usage error, 2 after --help. */
 int parse_options(int argc, char **argv, options *o)
 {
+    /* the options that take no value */
+    const struct { const char *name; int *set; } switches[] = {
+        {"--quiet", &o->quiet}, {"--profile", &o->profile}, {"--motion", &o->motion}, {"--builds", &o->builds}};
     default_options(o);
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i], *value = NULL;
@@ -180,22 +183,12 @@ int parse_options(int argc, char **argv, options *o)
             print_help();
             return 2;
         }
-        if (strcmp(name, "--quiet") == 0) {
-            o->quiet = 1;
+        int switched = 0;
+        for (size_t s = 0; s < sizeof switches / sizeof switches[0]; s++)
+            if (strcmp(name, switches[s].name) == 0)
+                *switches[s].set = switched = 1;
+        if (switched)
             continue;
-        }
-        if (strcmp(name, "--profile") == 0) {
-            o->profile = 1;
-            continue;
-        }
-        if (strcmp(name, "--motion") == 0) {
-            o->motion = 1;
-            continue;
-        }
-        if (strcmp(name, "--builds") == 0) {
-            o->builds = 1;
-            continue;
-        }
         if (!value) {
             if (i + 1 >= argc) {
                 fprintf(stderr, "bench: %s needs a value (see --help)\n", name);
