@@ -1,0 +1,145 @@
+/* accuracy.c - the reference's answers (tests/reference.h, in double
+   precision) on a fixed random subset of the primary rays, and a tracer's
+   errors against them: hit/miss disagreements, |t - t_ref| / r, |u - u_ref|. */
+#include "bench/bench.h"
+
+typedef struct reference_context {
+    const ref_scene *scene;
+    accuracy_set *set;
+    size_t first; /* of the rays traced */
+} reference_context;
+
+static void reference_block(void *context, size_t begin, size_t end)
+{
+    reference_context *c = (reference_context *)context;
+    for (size_t i = c->first + begin; i < c->first + end; i++)
+        c->set->ref_hits[i] = ref_intersect(c->scene, c->set->rays.org + 3 * i, c->set->rays.dir + 3 * i, 0.0,
+                                            INFINITY, &c->set->ref[i]);
+}
+
+/* The reference's answers for the set's rays [first, end). */
+void reference_trace(const ref_scene *reference, accuracy_set *a, size_t first, size_t end,
+                     unsigned thread_count)
+{
+    reference_context context = {reference, a, first};
+    parallel_for(end - first, thread_count, reference_block, &context);
+}
+
+/* Picks `wanted` distinct primary rays with a fixed seed (partial
+   Fisher-Yates) and copies them, without their times; the same rays on
+   every call. */
+int accuracy_pick(const ray_set *primary, size_t wanted, accuracy_set *a)
+{
+    memset(a, 0, sizeof *a);
+    size_t n = wanted < primary->count ? wanted : primary->count;
+    uint32_t *order = (uint32_t *)malloc((primary->count ? primary->count : 1) * sizeof(uint32_t));
+    a->ref = (ref_hit *)malloc((n ? n : 1) * sizeof(ref_hit));
+    a->ref_hits = (int *)malloc((n ? n : 1) * sizeof(int));
+    if (!order || !a->ref || !a->ref_hits || ray_set_alloc(&a->rays, RAYS_PRIMARY, n) != 0) {
+        free(order);
+        return 1;
+    }
+    for (size_t i = 0; i < primary->count; i++)
+        order[i] = (uint32_t)i;
+    scene_rng rng;
+    scene_rng_seed(&rng, 777);
+    for (size_t i = 0; i < n; i++) {
+        size_t j = i + (size_t)(((uint64_t)scene_rng_u32(&rng) * (primary->count - i)) >> 32);
+        uint32_t chosen = order[j];
+        order[j] = order[i];
+        order[i] = chosen;
+        memcpy(a->rays.org + 3 * i, primary->org + 3 * (size_t)chosen, 3 * sizeof(float));
+        memcpy(a->rays.dir + 3 * i, primary->dir + 3 * (size_t)chosen, 3 * sizeof(float));
+        a->rays.tfar[i] = primary->tfar[chosen];
+    }
+    free(order);
+    return 0;
+}
+
+/* accuracy_pick, and the picked rays traced with the reference only. */
+int accuracy_prepare(const hair_scene *s, const ray_set *primary, size_t wanted, unsigned thread_count,
+                     accuracy_set *a)
+{
+    if (accuracy_pick(primary, wanted, a) != 0)
+        return 1;
+    double start = scene_now();
+    /* the reference reads Bezier segments: a Catmull-Rom scene's are converted for it, then freed */
+    hair_scene bezier;
+    const hair_scene *input = s;
+    if (s->basis != SCENE_BASIS_BEZIER) {
+        if (scene_to_bezier(s, &bezier) != 0)
+            return 1;
+        input = &bezier;
+    }
+    ref_scene *reference = ref_build(input->vertices, input->vertex_count, input->indices, input->segment_count);
+    if (input == &bezier)
+        scene_free(&bezier);
+    if (!reference)
+        return 1;
+    reference_trace(reference, a, 0, a->rays.count, thread_count);
+    ref_free(reference);
+    a->seconds = scene_now() - start;
+    return 0;
+}
+
+void accuracy_free(accuracy_set *a)
+{
+    ray_set_free(&a->rays);
+    free(a->ref);
+    free(a->ref_hits);
+    memset(a, 0, sizeof *a);
+}
+
+/* Nearest-rank percentile of a sorted array. */
+static double percentile(const double *sorted, size_t n, double p)
+{
+    return n ? sorted[(size_t)(p * (double)(n - 1) + 0.5)] : NAN;
+}
+
+int accuracy_measure(const tracer *t, const accuracy_set *a, accuracy_summary *out)
+{
+    size_t n = a->rays.count;
+    memset(out, 0, sizeof *out);
+    hit_record *hits = (hit_record *)malloc((n ? n : 1) * sizeof(hit_record));
+    double *t_errors = (double *)malloc((n ? n : 1) * sizeof(double));
+    double *u_errors = (double *)malloc((n ? n : 1) * sizeof(double));
+    if (!hits || !t_errors || !u_errors) {
+        free(hits);
+        free(t_errors);
+        free(u_errors);
+        return 1;
+    }
+    trace_pass(t, &a->rays, hits, 1);
+    out->rays = n;
+    for (size_t i = 0; i < n; i++) {
+        int hit = hits[i].prim != NO_HIT;
+        const ref_hit *ref = &a->ref[i];
+        if (hit != a->ref_hits[i]) {
+            out->disagreements++;
+            continue;
+        }
+        if (!hit)
+            continue;
+        if (ref->r > 0.0)
+            t_errors[out->t_compared++] = fabs((double)hits[i].t - ref->t) / ref->r;
+        /* u on another segment is a different curve's parameter */
+        if (hits[i].prim == ref->prim_id)
+            u_errors[out->u_compared++] = fabs((double)hits[i].u - ref->u);
+    }
+    qsort(t_errors, out->t_compared, sizeof(double), compare_doubles);
+    qsort(u_errors, out->u_compared, sizeof(double), compare_doubles);
+    out->t_median = percentile(t_errors, out->t_compared, 0.5);
+    out->t_p99 = percentile(t_errors, out->t_compared, 0.99);
+    out->t_max = percentile(t_errors, out->t_compared, 1.0);
+    out->u_median = percentile(u_errors, out->u_compared, 0.5);
+    out->u_p99 = percentile(u_errors, out->u_compared, 0.99);
+    free(hits);
+    free(t_errors);
+    free(u_errors);
+    return 0;
+}
+
+double disagreement_percent(const accuracy_summary *a)
+{
+    return a->rays ? 100.0 * (double)a->disagreements / (double)a->rays : NAN;
+}

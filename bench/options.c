@@ -1,0 +1,257 @@
+/* options.c - the bench's command line: the defaults, --help, and parsing
+   into an options struct (bench.h). */
+#include "bench/bench.h"
+
+enum {
+    DEFAULT_SEGMENTS = 200000,
+    DEFAULT_RESOLUTION = 768, /* make bench within 2 minutes on 2 cores */
+    DEFAULT_ROUNDS = 3,
+    DEFAULT_ACCURACY_RAYS = 16384
+};
+
+#define DEFAULT_TSV_PATH "build/bench.tsv"
+#define DEFAULT_PNG_PATH "build/bench_error.png"
+#define DEFAULT_PLOT_SCRIPT "bench/plot.gp"
+
+static void print_help(void)
+{
+    printf("usage: build/bench [options]   (run from the repository root)\n"
+           "  --scene LIST        scenes, comma list or repeated (default combed):\n"
+           "                      combed, curly, random, crossing (procedural), straight (--straight-path),\n"
+           "                      furball (Embree's furBall_A, skipped if absent), or a PATH.hair file;\n"
+           "                      yeti: Yeti-class fur on a capsule, Catmull-Rom strands of 16 segments\n"
+           "                        holding 19 shared points (1.19 a segment), run by default with the yeti\n"
+           "                        group (with --variants, every row reads its Catmull-Rom curves); builds\n"
+           "                        and the reference that would not fit in MemAvailable are skipped, said so;\n"
+           "                        the paper's size: --scene yeti --segments 153M --rays primary,incoherent\n"
+           "  --segments N        segments of procedural scenes (default %d; k and M suffixes allowed)\n"
+           "  --res N             primary rays: N x N pinhole camera framing the hair (default %d)\n"
+           "  --rays LIST         ray sets: primary, incoherent, shadow (default all)\n"
+           "  --threads LIST      thread counts, e.g. 1,8 (default 1 and the number of cores)\n"
+           "  --variants LIST     variants or groups (default all):\n"
+           "                      hairobb: default (= mixed), exact4, exact16, pieces4, pieces8, pieces16,\n"
+           "                        aabb, obb, mixed-uncompressed, spatial, spatial-compressed,\n"
+           "                        spatial-compressed-cluster, shared, compressed-shared,\n"
+           "                        build-1t (defaults built on 1 thread), filter (a hit filter taking every hit),\n"
+           "                        sse2 (the SSE2 kernels, where the build has them: not with -mavx2 or -march)\n"
+           "                        catmull-rom, catmull-rom-copy (Catmull-Rom basis, without and with the Bezier\n"
+           "                        copy: on Bezier scenes other curves through the same points),\n"
+           "                        b-spline, b-spline-copy (the same for the uniform B-spline basis)\n"
+           "                      Embree: embree-r4, embree-r8, embree-r16 (flat), embree-round\n"
+           "                      groups: all, hairobb, embree, precision, ablation, bases,\n"
+           "                        yeti (catmull-rom: hairobb C-R without the Bezier copy, embree-r4, embree-round)\n"
+           "  --rounds N          timing rounds, one pass of every variant each, after a warm-up pass;\n"
+           "                      medians and [min-max] reported (default %d, 1..64; --passes: the same)\n"
+           "  --accuracy-rays N   primary rays checked against the reference, 0 = none (default %d)\n"
+           "  --memory-mb N       builds and the reference whose estimated memory exceeds 0.9 of what is\n"
+           "                      available are skipped: N MB less this process's RSS (default MemAvailable)\n"
+           "  --tsv FILE          every figure, one row per scene and variant (default %s)\n"
+           "  --png FILE          run time against error chart, drawn by gnuplot if present (default %s)\n"
+           "  --plot-script FILE  gnuplot script (default %s)\n"
+           "  --straight-path P   file of the 'straight' scene (default $" TEST_DATA_STRAIGHT_HAIR_VARIABLE ",\n"
+           "                      else %s; skipped if absent)\n"
+           "  --furball-path P    furBall_A.bin.gz (default %s)\n"
+           "  --animate N         only an animation: combed fur (--segments) swaying over N frames, a BVH\n"
+           "                      refitted frame to frame against one built afresh: refit and build s,\n"
+           "                      primary Mrays/s of both (--res, --rounds, the first --threads), SAH ratios\n"
+           "                      (TSV: --tsv, one row a frame)\n"
+           "  --quiet             no progress on stderr (shown only when stderr is a terminal)\n"
+           "  --profile           no timing: one pass of each variant over each ray set on 1 thread,\n"
+           "                      a callgrind dump each (valgrind --collect-atstart=no), and a line\n"
+           "                      'profile' with the work per ray (bench/profile.sh: make profile)\n"
+           "  --save-load LIST    only this: combed scenes of these segment counts (e.g. 1M,10M), each\n"
+           "                      built (all cores), saved and loaded in memory --rounds times: bytes per\n"
+           "                      segment, build, save and load seconds (with the hair check, and without)\n",
+           DEFAULT_SEGMENTS, DEFAULT_RESOLUTION, DEFAULT_ROUNDS, DEFAULT_ACCURACY_RAYS, DEFAULT_TSV_PATH,
+           DEFAULT_PNG_PATH, DEFAULT_PLOT_SCRIPT, TEST_DATA_STRAIGHT_HAIR_DEFAULT, SCENE_FURBALL_DEFAULT_PATH);
+    /* two strings: C99 compilers need support only 4095 characters in one */
+    printf("  --builds            only build time: for each --scene, --rounds rounds of hairobb's defaults on all\n"
+           "                      cores, on 1 thread, and Embree flat r4 on all cores (Catmull-Rom scenes: both\n"
+           "                      read the Catmull-Rom curves), each freed before the next; medians [min-max] of\n"
+           "                      the seconds and of the ratios to Embree within each round\n"
+           "  --motion            only motion blur against Embree: combed fur (--segments) rotating about each\n"
+           "                      root (0.5 rad) or translating (0.05, 0.2), at 2 and 4 time steps, and static;\n"
+           "                      hairobb's defaults and Embree flat r4 (rtcSetGeometryTimeStepCount) on the same\n"
+           "                      arrays: build s, bytes/segment, primary and incoherent Mrays/s at random ray\n"
+           "                      times (--res, --rounds, --threads), accuracy at 8 times (--accuracy-rays),\n"
+           "                      TSV (--tsv, one row a motion and library)\n"
+           "  --help              this text\n");
+}
+
+/* Parses a count with an optional k or M suffix; 0 on success. */
+static int parse_count(const char *text, size_t *value)
+{
+    char *end;
+    errno = 0;
+    double number = strtod(text, &end);
+    if (*end == 'k' || *end == 'K')
+        number *= 1e3, end++;
+    else if (*end == 'm' || *end == 'M')
+        number *= 1e6, end++;
+    if (errno || end == text || *end != '\0' || !(number >= 0.0) || number > 4e9)
+        return 1;
+    *value = (size_t)(number + 0.5);
+    return 0;
+}
+
+static int add_scenes(options *o, const char *list)
+{
+    char *copy = (char *)malloc(strlen(list) + 1);
+    if (!copy)
+        return 1;
+    strcpy(copy, list);
+    /* names are kept for the whole run; the copy is never freed */
+    char *rest = NULL;
+    for (char *name = strtok_r(copy, ",", &rest); name; name = strtok_r(NULL, ",", &rest)) {
+        if (o->scene_count == MAX_SCENES) {
+            fprintf(stderr, "bench: at most %d scenes\n", MAX_SCENES);
+            return 1;
+        }
+        o->scenes[o->scene_count++] = name;
+    }
+    return 0;
+}
+
+static int parse_ray_kinds(options *o, const char *list)
+{
+    char buffer[256];
+    snprintf(buffer, sizeof buffer, "%s", list);
+    memset(o->ray_kind_enabled, 0, sizeof o->ray_kind_enabled);
+    char *rest = NULL;
+    for (char *name = strtok_r(buffer, ",", &rest); name; name = strtok_r(NULL, ",", &rest)) {
+        int found = 0;
+        for (int k = 0; k < RAY_KIND_COUNT; k++)
+            if (strcmp(name, ray_kind_names[k]) == 0)
+                o->ray_kind_enabled[k] = found = 1;
+        if (!found)
+            return 1;
+    }
+    return 0;
+}
+
+static int parse_thread_counts(options *o, const char *list)
+{
+    char buffer[256];
+    snprintf(buffer, sizeof buffer, "%s", list);
+    o->thread_count_count = 0;
+    char *rest = NULL;
+    for (char *item = strtok_r(buffer, ",", &rest); item; item = strtok_r(NULL, ",", &rest)) {
+        size_t count;
+        if (parse_count(item, &count) != 0 || count < 1 || count > 256 || o->thread_count_count == MAX_THREAD_COUNTS)
+            return 1;
+        o->thread_counts[o->thread_count_count++] = (unsigned)count;
+    }
+    return o->thread_count_count == 0;
+}
+
+static void default_options(options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->segments = DEFAULT_SEGMENTS;
+    o->resolution = DEFAULT_RESOLUTION;
+    for (int k = 0; k < RAY_KIND_COUNT; k++)
+        o->ray_kind_enabled[k] = 1;
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    o->thread_counts[o->thread_count_count++] = 1;
+    if (cores > 1)
+        o->thread_counts[o->thread_count_count++] = (unsigned)(cores < 256 ? cores : 256);
+    o->variant_list = "all";
+    o->rounds = DEFAULT_ROUNDS;
+    o->accuracy_rays = DEFAULT_ACCURACY_RAYS;
+    o->tsv_path = DEFAULT_TSV_PATH;
+    o->png_path = DEFAULT_PNG_PATH;
+    o->plot_script = DEFAULT_PLOT_SCRIPT;
+    o->straight_path = NULL; /* tests/test_data.h's rule */
+    o->furball_path = NULL;
+}
+
+/* Returns 0 to run, 1 on a usage error, 2 after --help. */
+int parse_options(int argc, char **argv, options *o)
+{
+    /* the options that take no value */
+    const struct { const char *name; int *set; } switches[] = {
+        {"--quiet", &o->quiet}, {"--profile", &o->profile}, {"--motion", &o->motion}, {"--builds", &o->builds}};
+    default_options(o);
+    for (int i = 1; i < argc; i++) {
+        const char *arg = argv[i], *value = NULL;
+        char name[64];
+        size_t length = strcspn(arg, "=");
+        snprintf(name, sizeof name, "%.*s", (int)length, arg);
+        if (arg[length] == '=')
+            value = arg + length + 1;
+        if (strcmp(name, "--help") == 0 || strcmp(name, "-h") == 0) {
+            print_help();
+            return 2;
+        }
+        int switched = 0;
+        for (size_t s = 0; s < sizeof switches / sizeof switches[0]; s++)
+            if (strcmp(name, switches[s].name) == 0)
+                *switches[s].set = switched = 1;
+        if (switched)
+            continue;
+        if (!value) {
+            if (i + 1 >= argc) {
+                fprintf(stderr, "bench: %s needs a value (see --help)\n", name);
+                return 1;
+            }
+            value = argv[++i];
+        }
+        size_t count = 0;
+        int bad = 0;
+        if (strcmp(name, "--scene") == 0)
+            bad = add_scenes(o, value);
+        else if (strcmp(name, "--segments") == 0)
+            bad = parse_count(value, &o->segments) || o->segments == 0;
+        else if (strcmp(name, "--res") == 0) {
+            bad = parse_count(value, &count) || count < 1 || count > 16384;
+            o->resolution = (int)count;
+        } else if (strcmp(name, "--rays") == 0)
+            bad = parse_ray_kinds(o, value);
+        else if (strcmp(name, "--threads") == 0)
+            bad = parse_thread_counts(o, value);
+        else if (strcmp(name, "--variants") == 0) {
+            o->variant_list = value;
+            o->variants_given = 1;
+        } else if (strcmp(name, "--rounds") == 0 || strcmp(name, "--passes") == 0) {
+            bad = parse_count(value, &count) || count < 1 || count > MAX_ROUNDS;
+            o->rounds = (int)count;
+        } else if (strcmp(name, "--accuracy-rays") == 0)
+            bad = parse_count(value, &o->accuracy_rays);
+        else if (strcmp(name, "--memory-mb") == 0)
+            bad = parse_count(value, &o->memory_mb) || o->memory_mb == 0;
+        else if (strcmp(name, "--tsv") == 0)
+            o->tsv_path = value;
+        else if (strcmp(name, "--png") == 0)
+            o->png_path = value;
+        else if (strcmp(name, "--plot-script") == 0)
+            o->plot_script = value;
+        else if (strcmp(name, "--straight-path") == 0)
+            o->straight_path = value;
+        else if (strcmp(name, "--furball-path") == 0)
+            o->furball_path = value;
+        else if (strcmp(name, "--animate") == 0) {
+            bad = parse_count(value, &count) || count < 1 || count > 100000;
+            o->animate_frames = (int)count;
+        } else if (strcmp(name, "--save-load") == 0) {
+            char list[256], *item, *rest = NULL;
+            snprintf(list, sizeof list, "%s", value);
+            o->save_load_count = 0;
+            for (item = strtok_r(list, ",", &rest); item && !bad; item = strtok_r(NULL, ",", &rest)) {
+                bad = o->save_load_count == MAX_SAVE_LOAD || parse_count(item, &count) || count == 0;
+                if (!bad)
+                    o->save_load_segments[o->save_load_count++] = count;
+            }
+            bad = bad || o->save_load_count == 0;
+        } else {
+            fprintf(stderr, "bench: unknown option %s (see --help)\n", name);
+            return 1;
+        }
+        if (bad) {
+            fprintf(stderr, "bench: bad value '%s' for %s (see --help)\n", value, name);
+            return 1;
+        }
+    }
+    if (o->scene_count == 0)
+        o->scenes[o->scene_count++] = "combed";
+    return 0;
+}
