@@ -488,7 +488,7 @@
        >>kernels         compiled once, and again for AVX2 where dispatched:
        >>simd            SIMD wrappers and their plain C twins
        >>segment_points  a segment's Bezier points as traced
-       >>traversal       node tests (one helper reads a node) and the traversal loop
+       >>traversal       each layout's node test and the traversal loop
        >>intersector     ray/curve intersection and hit attributes
        >>tracing_api     hairobb_intersect1 and its siblings
        >>dispatch        the kernels' names for their AVX2 copy
@@ -974,7 +974,11 @@ static void *hairobb__malloc_large(size_t bytes, void *user)
 #define HAIROBB__REF_QOBB_MB 10u
 #define HAIROBB__REF_QOBB_PER_CHILD_MB 11u
 #define HAIROBB__REF_TYPE(ref) ((unsigned)((ref) & 15u))
-#define HAIROBB__REF_OFFSET(ref) ((size_t)((ref) & ~(uint64_t)15))   /* an inner node's byte offset in node memory */
+/* Inner node ref in node memory: every reader of a node (the traversal,
+   refit, the SAH cost, the loader's walk) finds it here. A leaf has no
+   address (a one-leaf tree has no node memory). */
+#define HAIROBB__NODE_OFFSET(ref) ((size_t)((ref) & ~(uint64_t)15))
+#define HAIROBB__NODE_AT(nodes, ref) ((nodes) + HAIROBB__NODE_OFFSET(ref))
 #define HAIROBB__MOVING(type) ((type) >= HAIROBB__REF_QAABB_MB && (type) <= HAIROBB__REF_QOBB_PER_CHILD_MB)
 #define HAIROBB__STILL_TYPE(type) (HAIROBB__MOVING(type) ? (type) - 4u : (type))
 
@@ -1139,12 +1143,6 @@ struct hairobb_bvh {
     int points_in_place;              /* static Bezier points (input or copy): read where they are */
 };
 
-/* Inner node ref in the BVH's node memory (a leaf has no address: a
-   one-leaf tree has no node memory). */
-HAIROBB__INLINE const void *hairobb__node_at(const hairobb_bvh *bvh, uint64_t ref)
-{
-    return bvh->nodes + HAIROBB__REF_OFFSET(ref);
-}
 
 /* The Bezier control points of segment prim as traced at time: defined
    with the kernels ("Segment points as traced"), which read them per leaf. */
@@ -4237,7 +4235,7 @@ static void hairobb__finish_tree(const hairobb__finish *f, unsigned char *slot, 
     }
     ref += node_delta;
     memcpy(slot, &ref, sizeof ref);
-    child_offset = (size_t)(ref & ~(uint64_t)15) + hairobb__node_size(type) - HAIROBB__W * sizeof(uint64_t);
+    child_offset = HAIROBB__NODE_OFFSET(ref) + hairobb__node_size(type) - HAIROBB__W * sizeof(uint64_t);
     for (i = 0; i < HAIROBB__W; ++i) hairobb__finish_tree(f, f->nodes + child_offset + i * sizeof ref, node_delta, leaf_count);
 }
 
@@ -4601,7 +4599,7 @@ static int hairobb__children(const unsigned char *nodes, uint64_t ref, uint64_t 
 {
     unsigned type = HAIROBB__REF_TYPE(ref);
     int count = 0;
-    memcpy(child, nodes + (ref & ~(uint64_t)15) + hairobb__node_size(type) - HAIROBB__W * sizeof(uint64_t),
+    memcpy(child, HAIROBB__NODE_AT(nodes, ref) + hairobb__node_size(type) - HAIROBB__W * sizeof(uint64_t),
            HAIROBB__W * sizeof(uint64_t));
     while (count < HAIROBB__W && HAIROBB__REF_TYPE(child[count]) != HAIROBB__REF_EMPTY) ++count;
     return count;
@@ -4622,7 +4620,7 @@ static double hairobb__sah_subtree(const hairobb_bvh *bvh, uint64_t ref, double 
     still = HAIROBB__STILL_TYPE(type);
     cost = area * (double)count * (double)(still == HAIROBB__REF_AABB || still == HAIROBB__REF_QAABB ? HAIROBB__COST_AABB : HAIROBB__COST_OBB);
     for (i = 0; i < count; ++i)
-        cost += hairobb__sah_subtree(bvh, child[i], (double)hairobb__child_area(bvh->nodes + (ref & ~(uint64_t)15), type, i));
+        cost += hairobb__sah_subtree(bvh, child[i], (double)hairobb__child_area(HAIROBB__NODE_AT(bvh->nodes, ref), type, i));
     return cost;
 }
 
@@ -4683,7 +4681,7 @@ static void hairobb__refit_box_grow(hairobb__refit_box *box, const hairobb__refi
 static void hairobb__refit_node(const hairobb__refit *f, uint64_t ref, const hairobb__range *ranges, int count,
                                 const hairobb__refit_box *children, const hairobb__refit_box *box)
 {
-    unsigned char *node = f->nodes + (ref & ~(uint64_t)15);
+    unsigned char *node = HAIROBB__NODE_AT(f->nodes, ref);
     unsigned type = HAIROBB__REF_TYPE(ref);
     float centre[3], frames[HAIROBB__W][9], axis_boxes[HAIROBB__W][6];
     int i;
@@ -5121,7 +5119,7 @@ typedef struct hairobb__tree_check {
 static int hairobb__check_tree(hairobb__tree_check *c, uint64_t ref, unsigned depth)
 {
     unsigned type = HAIROBB__REF_TYPE(ref);
-    size_t offset = (size_t)(ref & ~(uint64_t)15), stride, granule;
+    size_t offset = HAIROBB__NODE_OFFSET(ref), stride, granule;
     uint64_t child[HAIROBB__W];
     int i, child_count;
     if (type == HAIROBB__REF_LEAF) {
@@ -6067,58 +6065,6 @@ HAIROBB__INLINE int hairobb__intersect_obb_node(const hairobb__obb_node *node, c
     return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
 }
 
-/* The one place the traversal reads a node: the slab test of inner node
-   ref's children, whatever its layout (bits: the children the ray enters,
-   dist their entry distances, *child their references). Leaves and empty
-   references give 0 and *child = NULL. The default layout's types are
-   tested first: a compare each. */
-HAIROBB__INLINE int hairobb__intersect_node(const hairobb_bvh *bvh, uint64_t ref, const hairobb__ray_state *rs,
-                                            float dist[HAIROBB__W], const uint64_t **child)
-{
-    unsigned type = HAIROBB__REF_TYPE(ref);
-    if (type == HAIROBB__REF_QOBB_PER_CHILD) {
-        const hairobb__compressed_obb_node *q = HAIROBB__CAST(const hairobb__compressed_obb_node *, hairobb__node_at(bvh, ref));
-        *child = q->child;
-        return hairobb__intersect_compressed_obb_node(q, NULL, rs, dist);
-    }
-    if (type == HAIROBB__REF_AABB) {
-        const hairobb__aabb_node *aabb = HAIROBB__CAST(const hairobb__aabb_node *, hairobb__node_at(bvh, ref));
-        *child = aabb->child;
-        return hairobb__intersect_boxes(aabb->lower[0], &rs->world, rs, dist);
-    }
-    if (type == HAIROBB__REF_LEAF || type == HAIROBB__REF_EMPTY) {
-        *child = NULL;
-        return 0;
-    }
-    if (type == HAIROBB__REF_QAABB || type == HAIROBB__REF_QOBB) {
-        const hairobb__compressed_node *q = HAIROBB__CAST(const hairobb__compressed_node *, hairobb__node_at(bvh, ref));
-        *child = q->child;
-        return hairobb__intersect_compressed_node(q, type == HAIROBB__REF_QOBB, NULL, rs, dist);
-    }
-    if (type == HAIROBB__REF_ROTATED) {
-        const hairobb__rotated_node *rotated = HAIROBB__CAST(const hairobb__rotated_node *, hairobb__node_at(bvh, ref));
-        *child = rotated->child;
-        return hairobb__intersect_rotated_node(rotated, rs, dist);
-    }
-    /* moving hair's nodes: the planes at time 1 follow the node */
-    if (type == HAIROBB__REF_QOBB_PER_CHILD_MB) {
-        const hairobb__compressed_obb_node *q = HAIROBB__CAST(const hairobb__compressed_obb_node *, hairobb__node_at(bvh, ref));
-        *child = q->child;
-        return hairobb__intersect_compressed_obb_node(q, HAIROBB__CAST(const signed char *, (const void *)(q + 1)), rs, dist);
-    }
-    if (type == HAIROBB__REF_QAABB_MB || type == HAIROBB__REF_QOBB_MB) {
-        const hairobb__compressed_node *q = HAIROBB__CAST(const hairobb__compressed_node *, hairobb__node_at(bvh, ref));
-        *child = q->child;
-        return hairobb__intersect_compressed_node(q, type == HAIROBB__REF_QOBB_MB, HAIROBB__CAST(const signed char *, (const void *)(q + 1)),
-                                                  rs, dist);
-    }
-    {
-        const hairobb__obb_node *obb = HAIROBB__CAST(const hairobb__obb_node *, hairobb__node_at(bvh, ref));
-        *child = obb->child;
-        return hairobb__intersect_obb_node(obb, rs, dist);
-    }
-}
-
 static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint64_t ref, int any_hit);
 
 /* Nearest-first traversal; any_hit stops at the first hit. A node with
@@ -6132,18 +6078,56 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
     uint64_t ref = bvh->root;
     rs->any_hit = any_hit;
     for (;;) {
+        /* the default layout's types first: a compare each */
+        unsigned type = HAIROBB__REF_TYPE(ref);
+        const void *node;   /* set for inner nodes only: a one-leaf tree has no node memory */
         const uint64_t *child;
         float dist[HAIROBB__W];
-        int bits = hairobb__intersect_node(bvh, ref, rs, dist, &child), i;
-        if (child) {
-            HAIROBB__COUNT(node);
-        } else if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_LEAF) {
+        int bits, i;
+        if (type == HAIROBB__REF_QOBB_PER_CHILD) {
+            node = HAIROBB__NODE_AT(bvh->nodes, ref);
+            bits = hairobb__intersect_compressed_obb_node(HAIROBB__CAST(const hairobb__compressed_obb_node *, node), NULL, rs, dist);
+            child = HAIROBB__CAST(const hairobb__compressed_obb_node *, node)->child;
+        } else if (type == HAIROBB__REF_AABB) {
+            const hairobb__aabb_node *aabb = HAIROBB__CAST(const hairobb__aabb_node *, (const void *)HAIROBB__NODE_AT(bvh->nodes, ref));
+            bits = hairobb__intersect_boxes(aabb->lower[0], &rs->world, rs, dist);
+            child = aabb->child;
+        } else if (type == HAIROBB__REF_LEAF) {
             HAIROBB__COUNT(leaf);
             if (hairobb__intersect_leaf(bvh, rs, ref, any_hit)) {
                 found = 1;
                 if (any_hit) return 1;
             }
+            bits = 0;
+            child = NULL;
+        } else if (type == HAIROBB__REF_EMPTY) {
+            bits = 0;
+            child = NULL;
+        } else if (type == HAIROBB__REF_QAABB || type == HAIROBB__REF_QOBB) {
+            node = HAIROBB__NODE_AT(bvh->nodes, ref);
+            bits = hairobb__intersect_compressed_node(HAIROBB__CAST(const hairobb__compressed_node *, node),
+                                                      type == HAIROBB__REF_QOBB, NULL, rs, dist);
+            child = HAIROBB__CAST(const hairobb__compressed_node *, node)->child;
+        } else if (type == HAIROBB__REF_ROTATED) {
+            node = HAIROBB__NODE_AT(bvh->nodes, ref);
+            bits = hairobb__intersect_rotated_node(HAIROBB__CAST(const hairobb__rotated_node *, node), rs, dist);
+            child = HAIROBB__CAST(const hairobb__rotated_node *, node)->child;
+        } else if (type == HAIROBB__REF_QOBB_PER_CHILD_MB) {   /* moving hair's nodes: the planes at time 1 follow */
+            node = HAIROBB__NODE_AT(bvh->nodes, ref);
+            bits = hairobb__intersect_compressed_obb_node(HAIROBB__CAST(const hairobb__compressed_obb_node *, node),
+                                                          HAIROBB__CAST(const signed char *, node) + sizeof(hairobb__compressed_obb_node), rs, dist);
+            child = HAIROBB__CAST(const hairobb__compressed_obb_node *, node)->child;
+        } else if (type == HAIROBB__REF_QAABB_MB || type == HAIROBB__REF_QOBB_MB) {
+            node = HAIROBB__NODE_AT(bvh->nodes, ref);
+            bits = hairobb__intersect_compressed_node(HAIROBB__CAST(const hairobb__compressed_node *, node), type == HAIROBB__REF_QOBB_MB,
+                                                      HAIROBB__CAST(const signed char *, node) + sizeof(hairobb__compressed_node), rs, dist);
+            child = HAIROBB__CAST(const hairobb__compressed_node *, node)->child;
+        } else {
+            node = HAIROBB__NODE_AT(bvh->nodes, ref);
+            bits = hairobb__intersect_obb_node(HAIROBB__CAST(const hairobb__obb_node *, node), rs, dist);
+            child = HAIROBB__CAST(const hairobb__obb_node *, node)->child;
         }
+        if (child) HAIROBB__COUNT(node);
         if (bits) {
             int base = sp;
             i = hairobb__lowest_bit((unsigned)bits);
@@ -6784,7 +6768,6 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__intersect_compressed_obb_node hairobb__intersect_compressed_obb_node_avx2
 #define hairobb__intersect_curve hairobb__intersect_curve_avx2
 #define hairobb__intersect_leaf hairobb__intersect_leaf_avx2
-#define hairobb__intersect_node hairobb__intersect_node_avx2
 #define hairobb__intersect_obb_node hairobb__intersect_obb_node_avx2
 #define hairobb__intersect_rotated_node hairobb__intersect_rotated_node_avx2
 #define hairobb__intersect_segment hairobb__intersect_segment_avx2
