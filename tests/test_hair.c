@@ -12,33 +12,7 @@
 #include <unistd.h>
 #include <sys/stat.h>
 
-/* Counts live blocks and the largest request; fails the fail_at-th call. */
-typedef struct test_allocator {
-    long calls, fail_at, live;
-    size_t largest;
-} test_allocator;
-static void *test_malloc(size_t size, void *user)
-{
-    test_allocator *a = (test_allocator *)user;
-    void *p;
-    if (!a) return malloc(size);
-    if (size > a->largest) a->largest = size;
-    if (a->calls++ == a->fail_at) return NULL;
-    p = malloc(size);
-    if (p) {
-        memset(p, 0xa5, size);   /* what the reader does not write shows */
-        a->live++;
-    }
-    return p;
-}
-static void test_free(void *p, void *user)
-{
-    test_allocator *a = (test_allocator *)user;
-    if (p && a) a->live--;
-    free(p);
-}
-#define HAIROBB_MALLOC(size, user) test_malloc(size, user)
-#define HAIROBB_FREE(ptr, user) test_free(ptr, user)
+#include "test_alloc.h"   /* counts live blocks and fails the fail_at-th allocation */
 #define HAIROBB_IMPLEMENTATION
 #include "../hairobb.h"
 #include "check.h"
@@ -159,8 +133,7 @@ static int arrays_as_written(const hairobb_hair *h, const hair_spec *spec, const
 
 static hairobb_result read_counted(const unsigned char *data, size_t size, test_allocator *a, hairobb_hair *h)
 {
-    memset(a, 0, sizeof *a);
-    a->fail_at = -1;
+    test_allocator_init(a, -1);
     return hairobb_hair_read(data, size, a, h);
 }
 
@@ -322,14 +295,12 @@ static void test_allocation_failure(void)
     fclose(file);
     for (fail_at = 0; fail_at < calls + 1; ++fail_at) {
         hairobb_result r, from_file;
-        memset(&a, 0, sizeof a);
-        a.fail_at = fail_at;
+        test_allocator_init(&a, fail_at);
         if (fail_at < calls) {
             r = hairobb_hair_read(data, size, &a, &h);
             if (r != HAIROBB_ERROR_OUT_OF_MEMORY || a.live != 0 || h.vertices) right = 0;
         }
-        memset(&a, 0, sizeof a);
-        a.fail_at = fail_at;
+        test_allocator_init(&a, fail_at);
         from_file = hairobb_hair_load(path, &a, &h);   /* one allocation more: the file's bytes */
         if (from_file != HAIROBB_ERROR_OUT_OF_MEMORY || a.live != 0 || h.vertices) right = 0;
     }
@@ -354,8 +325,7 @@ static void test_files(void)
     file = fopen(path, "wb");
     fwrite(data, 1, size, file);
     fclose(file);
-    memset(&a, 0, sizeof a);
-    a.fail_at = -1;
+    test_allocator_init(&a, -1);
     r = hairobb_hair_load(path, &a, &h);
     CHECK(r == HAIROBB_OK && read_counted(data, size, &b, &from_memory) == HAIROBB_OK &&
           h.vertex_count == from_memory.vertex_count && h.segment_count == from_memory.segment_count &&
@@ -375,8 +345,7 @@ static void test_files(void)
     file = fopen(path, "wb");
     fwrite(data, 1, 128, file);
     fclose(file);
-    memset(&a, 0, sizeof a);
-    a.fail_at = -1;
+    test_allocator_init(&a, -1);
     r = hairobb_hair_load(path, &a, &h);
     CHECK(r == HAIROBB_ERROR_INVALID_FILE && a.largest == 0, "a header announcing 4G points in 128 bytes: %s, largest allocation %zu",
           hairobb_result_string(r), a.largest);
