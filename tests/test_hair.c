@@ -22,16 +22,6 @@
 /* ------------------------------------------------------------------------ */
 /* Writing .hair files */
 
-static void put_u32(unsigned char *p, uint32_t v)
-{
-    p[0] = (unsigned char)v; p[1] = (unsigned char)(v >> 8); p[2] = (unsigned char)(v >> 16); p[3] = (unsigned char)(v >> 24);
-}
-static void put_f32(unsigned char *p, float f)
-{
-    uint32_t bits;
-    memcpy(&bits, &f, sizeof bits);
-    put_u32(p, bits);
-}
 
 /* A file with `strands` strands of 1..6 points (or all of default_segments + 1
    points when the segments array is left out), the arrays of `flags`, and
@@ -58,24 +48,24 @@ static size_t write_hair(const hair_spec *spec, unsigned char **data)
            ((spec->flags & 16) ? 12 * (size_t)points : 0);
     p = (unsigned char *)calloc(size, 1);
     memcpy(p, "HAIR", 4);
-    put_u32(p + 4, spec->strands);
-    put_u32(p + 8, points);
-    put_u32(p + 12, spec->flags);
-    put_u32(p + 16, spec->default_segments);
-    put_f32(p + 20, spec->default_thickness);
-    put_f32(p + 24, 0.25f);
-    put_f32(p + 28, 0.5f); put_f32(p + 32, 0.75f); put_f32(p + 36, 1.0f);
+    scene_put_le_u32(p + 4, spec->strands);
+    scene_put_le_u32(p + 8, points);
+    scene_put_le_u32(p + 12, spec->flags);
+    scene_put_le_u32(p + 16, spec->default_segments);
+    scene_put_le_f32(p + 20, spec->default_thickness);
+    scene_put_le_f32(p + 24, 0.25f);
+    scene_put_le_f32(p + 28, 0.5f); scene_put_le_f32(p + 32, 0.75f); scene_put_le_f32(p + 36, 1.0f);
     strcpy((char *)p + 40, "written by test_hair");
     at = 128;
     if (spec->flags & 1)
         for (k = 0; k < spec->strands; ++k, at += 2) { p[at] = (unsigned char)(counts[k] - 1); p[at + 1] = 0; }
-    for (i = 0; i < 3 * (size_t)points; ++i, at += 4) put_f32(p + at, scene_rng_range(&rng, -10.0f, 10.0f));
+    for (i = 0; i < 3 * (size_t)points; ++i, at += 4) scene_put_le_f32(p + at, scene_rng_range(&rng, -10.0f, 10.0f));
     if (spec->flags & 4)
-        for (i = 0; i < points; ++i, at += 4) put_f32(p + at, scene_rng_range(&rng, 0.0f, 0.2f));
+        for (i = 0; i < points; ++i, at += 4) scene_put_le_f32(p + at, scene_rng_range(&rng, 0.0f, 0.2f));
     if (spec->flags & 8)
-        for (i = 0; i < points; ++i, at += 4) put_f32(p + at, scene_rng_float(&rng));
+        for (i = 0; i < points; ++i, at += 4) scene_put_le_f32(p + at, scene_rng_float(&rng));
     if (spec->flags & 16)
-        for (i = 0; i < 3 * (size_t)points; ++i, at += 4) put_f32(p + at, scene_rng_float(&rng));
+        for (i = 0; i < 3 * (size_t)points; ++i, at += 4) scene_put_le_f32(p + at, scene_rng_float(&rng));
     free(counts);
     *data = p;
     return size;
@@ -238,33 +228,33 @@ static void test_lying_headers(void)
     do { memcpy(copy, source, source_size); statement; expect_error(copy, source_size, want, what); } while (0)
     MUTATE(data, size, copy[0] = 'h', HAIROBB_ERROR_INVALID_FILE, "bad magic");
     for (bit = 5; bit < 32; ++bit)
-        MUTATE(data, size, put_u32(copy + 12, scene_le_u32(copy + 12) | 1u << bit), HAIROBB_ERROR_INVALID_FILE, "a reserved flag bit");
-    MUTATE(data, size, put_u32(copy + 12, 1 | 4), HAIROBB_ERROR_INVALID_FILE, "no points array");
-    MUTATE(data, size, put_u32(copy + 12, 1 | 2 | 4 | 8), HAIROBB_ERROR_INVALID_FILE, "a flag for an array that is not there");
-    MUTATE(data, size, put_u32(copy + 12, 1 | 2), HAIROBB_ERROR_INVALID_FILE, "an array not flagged");
-    MUTATE(data, size, put_u32(copy + 4, 7), HAIROBB_ERROR_INVALID_FILE, "one strand more than the file holds");
-    MUTATE(data, size, put_u32(copy + 8, points + 1), HAIROBB_ERROR_INVALID_FILE, "one point more than the file holds");
+        MUTATE(data, size, scene_put_le_u32(copy + 12, scene_le_u32(copy + 12) | 1u << bit), HAIROBB_ERROR_INVALID_FILE, "a reserved flag bit");
+    MUTATE(data, size, scene_put_le_u32(copy + 12, 1 | 4), HAIROBB_ERROR_INVALID_FILE, "no points array");
+    MUTATE(data, size, scene_put_le_u32(copy + 12, 1 | 2 | 4 | 8), HAIROBB_ERROR_INVALID_FILE, "a flag for an array that is not there");
+    MUTATE(data, size, scene_put_le_u32(copy + 12, 1 | 2), HAIROBB_ERROR_INVALID_FILE, "an array not flagged");
+    MUTATE(data, size, scene_put_le_u32(copy + 4, 7), HAIROBB_ERROR_INVALID_FILE, "one strand more than the file holds");
+    MUTATE(data, size, scene_put_le_u32(copy + 8, points + 1), HAIROBB_ERROR_INVALID_FILE, "one point more than the file holds");
     MUTATE(data, size, copy[128] = (unsigned char)(copy[128] + 1), HAIROBB_ERROR_INVALID_FILE, "strand lengths that add up to more points");
     MUTATE(data, size, copy[128] = (unsigned char)(copy[128] - 1), HAIROBB_ERROR_INVALID_FILE, "strand lengths that add up to fewer points");
     MUTATE(data, size, copy[129] = 0xff, HAIROBB_ERROR_INVALID_FILE, "a strand of 65000 segments");
     for (i = 0; i < sizeof huge_counts / sizeof huge_counts[0]; ++i) {
-        MUTATE(data, size, put_u32(copy + 4, huge_counts[i]), HAIROBB_ERROR_INVALID_FILE, "a huge strand count");
-        MUTATE(data, size, put_u32(copy + 8, huge_counts[i]), HAIROBB_ERROR_INVALID_FILE, "a huge point count");
-        MUTATE(plain, plain_size, put_u32(copy + 4, huge_counts[i]), HAIROBB_ERROR_INVALID_FILE,
+        MUTATE(data, size, scene_put_le_u32(copy + 4, huge_counts[i]), HAIROBB_ERROR_INVALID_FILE, "a huge strand count");
+        MUTATE(data, size, scene_put_le_u32(copy + 8, huge_counts[i]), HAIROBB_ERROR_INVALID_FILE, "a huge point count");
+        MUTATE(plain, plain_size, scene_put_le_u32(copy + 4, huge_counts[i]), HAIROBB_ERROR_INVALID_FILE,
                "a huge strand count, default segments");
-        MUTATE(plain, plain_size, put_u32(copy + 16, huge_counts[i]), HAIROBB_ERROR_INVALID_FILE, "huge default segments");
+        MUTATE(plain, plain_size, scene_put_le_u32(copy + 16, huge_counts[i]), HAIROBB_ERROR_INVALID_FILE, "huge default segments");
     }
-    MUTATE(plain, plain_size, put_u32(copy + 16, 3), HAIROBB_ERROR_INVALID_FILE, "default segments that disagree with the points");
-    MUTATE(plain, plain_size, put_u32(copy + 4, 0), HAIROBB_ERROR_INVALID_FILE, "no strands but points");
-    MUTATE(plain, plain_size, put_f32(copy + 20, -0.1f), HAIROBB_ERROR_INVALID_GEOMETRY, "a negative default thickness");
-    MUTATE(plain, plain_size, put_f32(copy + 20, NAN), HAIROBB_ERROR_INVALID_GEOMETRY, "a NaN default thickness");
-    MUTATE(data, size, put_f32(copy + 20, NAN), HAIROBB_OK, "a NaN default thickness the thickness array overrides");
-    MUTATE(data, size, put_f32(copy + 128 + 12 + 4, INFINITY), HAIROBB_ERROR_INVALID_GEOMETRY, "an infinite coordinate");
-    MUTATE(data, size, put_f32(copy + 128 + 12 + 8, NAN), HAIROBB_ERROR_INVALID_GEOMETRY, "a NaN coordinate");
-    MUTATE(data, size, put_f32(copy + 128 + 12, 1e30f), HAIROBB_ERROR_INVALID_GEOMETRY, "a coordinate beyond 1e18");
-    MUTATE(data, size, put_f32(copy + size - 4, -1.0f), HAIROBB_ERROR_INVALID_GEOMETRY, "a negative thickness");
-    MUTATE(data, size, put_f32(copy + size - 4, NAN), HAIROBB_ERROR_INVALID_GEOMETRY, "a NaN thickness");
-    MUTATE(plain, plain_size, put_f32(copy + plain_size - 4, INFINITY), HAIROBB_ERROR_INVALID_FILE, "an infinite colour");
+    MUTATE(plain, plain_size, scene_put_le_u32(copy + 16, 3), HAIROBB_ERROR_INVALID_FILE, "default segments that disagree with the points");
+    MUTATE(plain, plain_size, scene_put_le_u32(copy + 4, 0), HAIROBB_ERROR_INVALID_FILE, "no strands but points");
+    MUTATE(plain, plain_size, scene_put_le_f32(copy + 20, -0.1f), HAIROBB_ERROR_INVALID_GEOMETRY, "a negative default thickness");
+    MUTATE(plain, plain_size, scene_put_le_f32(copy + 20, NAN), HAIROBB_ERROR_INVALID_GEOMETRY, "a NaN default thickness");
+    MUTATE(data, size, scene_put_le_f32(copy + 20, NAN), HAIROBB_OK, "a NaN default thickness the thickness array overrides");
+    MUTATE(data, size, scene_put_le_f32(copy + 128 + 12 + 4, INFINITY), HAIROBB_ERROR_INVALID_GEOMETRY, "an infinite coordinate");
+    MUTATE(data, size, scene_put_le_f32(copy + 128 + 12 + 8, NAN), HAIROBB_ERROR_INVALID_GEOMETRY, "a NaN coordinate");
+    MUTATE(data, size, scene_put_le_f32(copy + 128 + 12, 1e30f), HAIROBB_ERROR_INVALID_GEOMETRY, "a coordinate beyond 1e18");
+    MUTATE(data, size, scene_put_le_f32(copy + size - 4, -1.0f), HAIROBB_ERROR_INVALID_GEOMETRY, "a negative thickness");
+    MUTATE(data, size, scene_put_le_f32(copy + size - 4, NAN), HAIROBB_ERROR_INVALID_GEOMETRY, "a NaN thickness");
+    MUTATE(plain, plain_size, scene_put_le_f32(copy + plain_size - 4, INFINITY), HAIROBB_ERROR_INVALID_FILE, "an infinite colour");
 #undef MUTATE
     expect_error(NULL, 0, HAIROBB_ERROR_INVALID_ARGUMENT, "no data");
     CHECK(hairobb_hair_read(data, size, NULL, NULL) == HAIROBB_ERROR_INVALID_ARGUMENT, "no hairobb_hair");
@@ -341,7 +331,7 @@ static void test_files(void)
     CHECK(truncate(path, 100) == 0 && hairobb_hair_load(path, NULL, &h) == HAIROBB_ERROR_INVALID_FILE, "a file shorter than its header");
     /* a header announcing 2^32-1 points in a file of 128 bytes: an error
        before anything that large is allocated */
-    put_u32(data + 8, 0xffffffffu);
+    scene_put_le_u32(data + 8, 0xffffffffu);
     file = fopen(path, "wb");
     fwrite(data, 1, 128, file);
     fclose(file);
