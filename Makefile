@@ -79,7 +79,7 @@ $(B):
 # width, check_ without Embree (make check), asan_/tsan_ under a sanitizer.
 # Every test program depends on the header and every shared test header;
 # its flags beyond the build's own are TEST_FLAGS_<name>.
-TEST_HEADERS = hairobb.h tests/check.h tests/test_alloc.h tests/test_data.h tests/reference.h \
+TEST_HEADERS = hairobb.h tests/check.h tests/test_alloc.h tests/test_data.h tests/scratch.h tests/reference.h \
                tests/ref_bases.h tests/scenes.h tests/embree_wrap.h
 TEST_FLAGS_test_unit            = -DHAIROBB_NODE_WIDTH=4
 TEST_FLAGS_test_unit_w8         = -DHAIROBB_NODE_WIDTH=8

@@ -18,6 +18,7 @@
 #include "check.h"
 #include "reference.h"
 #include "scenes.h"
+#include "scratch.h"
 
 /* ------------------------------------------------------------------------ */
 /* Writing .hair files */
@@ -272,14 +273,14 @@ static void test_allocation_failure(void)
     size_t size = write_hair(&spec, &data);
     long fail_at, calls;
     int right = 1;
-    char path[128];
+    char path[SCRATCH_PATH_SIZE];
     FILE *file;
     hairobb_hair h;
     test_allocator a;
     CHECK(read_counted(data, size, &a, &h) == HAIROBB_OK, "allocation count run");
     hairobb_hair_free(&h);
     calls = a.calls;
-    snprintf(path, sizeof path, "/tmp/hairobb_test_hair_%ld.hair", (long)getpid());
+    scratch_path(path, sizeof path, "allocation_failure.hair");
     file = fopen(path, "wb");
     fwrite(data, 1, size, file);
     fclose(file);
@@ -305,13 +306,13 @@ static void test_files(void)
     hair_spec spec = {12, 1 | 2 | 4 | 8 | 16, 0, 0.1f, 11};
     unsigned char *data;
     size_t size = write_hair(&spec, &data);
-    char path[128], dir[128];
+    char path[SCRATCH_PATH_SIZE], dir[SCRATCH_PATH_SIZE];
     FILE *file;
     hairobb_hair h, from_memory;
     test_allocator a, b;
     hairobb_result r;
-    snprintf(path, sizeof path, "/tmp/hairobb_test_hair_%ld.hair", (long)getpid());
-    snprintf(dir, sizeof dir, "/tmp/hairobb_test_hair_%ld.dir", (long)getpid());
+    scratch_path(path, sizeof path, "files.hair");
+    scratch_path(dir, sizeof dir, "files.dir");
     file = fopen(path, "wb");
     fwrite(data, 1, size, file);
     fclose(file);

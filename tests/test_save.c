@@ -35,6 +35,7 @@
 #include "check.h"
 #include "reference.h"
 #include "scenes.h"
+#include "scratch.h"
 
 /* ------------------------------------------------------------------------ */
 /* Rays and comparisons */
@@ -1048,11 +1049,11 @@ static void failing_allocations(void)
         CHECK(bad == 0, "%s: %ld of %ld failing allocations not out of memory without a leak", b ? "hermite" : "bezier", bad, allocations);
         /* save_file's one allocation */
         {
-            char path[64];
+            char path[SCRATCH_PATH_SIZE];
             hairobb_bvh *counted = NULL;
             test_allocator_init(&a, -1);
             CHECK(load_of(blob, size, &in, &opt, &counted) == HAIROBB_OK, "counting load");
-            snprintf(path, sizeof path, "/tmp/hairobb_test_save_%ld.bvh", (long)getpid());
+            scratch_path(path, sizeof path, "never_written.bvh");
             a.calls = 0;
             a.fail_at = 0;
             CHECK(hairobb_save_file(counted, path) == HAIROBB_ERROR_OUT_OF_MEMORY, "save_file out of memory");
@@ -1100,11 +1101,11 @@ static void files(void)
     hairobb_bvh *bvh = NULL, *loaded = NULL;
     unsigned char *blob, *read_back;
     size_t size, got;
-    char path[64];
+    char path[SCRATCH_PATH_SIZE];
     FILE *f;
     hairobb_result r;
     CHECK(scene_combed(&s, 500, 61) == 0, "scene");
-    snprintf(path, sizeof path, "/tmp/hairobb_test_save_%ld.bvh", (long)getpid());
+    scratch_path(path, sizeof path, "files.bvh");
     CHECK(hairobb_build(s.vertices, s.vertex_count, s.indices, s.segment_count, NULL, &bvh) == HAIROBB_OK, "build");
     blob = save_of(bvh, &size);
     r = hairobb_save_file(bvh, path);
@@ -1133,7 +1134,7 @@ static void files(void)
     remove(path);
     r = hairobb_load_file(path, s.vertices, s.vertex_count, s.indices, s.segment_count, NULL, &loaded);
     CHECK(r == HAIROBB_ERROR_IO && !loaded, "a missing file: %s", hairobb_result_string(r));
-    r = hairobb_load_file("/tmp", s.vertices, s.vertex_count, s.indices, s.segment_count, NULL, &loaded);
+    r = hairobb_load_file(scratch_dir(), s.vertices, s.vertex_count, s.indices, s.segment_count, NULL, &loaded);
     CHECK(r == HAIROBB_ERROR_IO && !loaded, "a directory: %s", hairobb_result_string(r));
     r = hairobb_load_file("/dev/null", s.vertices, s.vertex_count, s.indices, s.segment_count, NULL, &loaded);
     CHECK(r == HAIROBB_ERROR_INVALID_FILE && !loaded, "an empty file: %s", hairobb_result_string(r));

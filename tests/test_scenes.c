@@ -1,8 +1,9 @@
 /* test_scenes.c - checks the test support code (tests/scenes.h and
  * tests/embree_wrap.h) before it is trusted to judge hairobb.
  *
- *   gcc -std=c99 -O2 -Wall -Wextra -pedantic tests/test_scenes.c -o /tmp/test_scenes -lembree3 -lm
- *   /tmp/test_scenes     (straight.hair found by tests/test_data.h's rule)
+ *   gcc -std=c99 -O2 -Wall -Wextra -pedantic tests/test_scenes.c -o build/test_scenes -lembree3 -lm
+ *   build/test_scenes     (from the repository root: straight.hair found by
+ *                          tests/test_data.h's rule, files written in build/)
  *
  * Prints PASS/FAIL per check, SKIP for data that is absent, indented info
  * lines (counts, bounds, Embree build cost, camera hit fractions), and last
@@ -20,6 +21,7 @@
 #include "check.h"
 #include "embree_wrap.h"
 #include "scenes.h"
+#include "scratch.h"
 
 static void info(const char *format, ...) CHECK_PRINTF_LIKE(1);
 
@@ -384,8 +386,8 @@ static int write_file(const char *path, const unsigned char *data, size_t size)
    loader says about it. */
 static int load_variant(const unsigned char *data, size_t size)
 {
-    char path[128];
-    snprintf(path, sizeof path, "/tmp/hairobb_test_scenes_%ld.hair", (long)getpid());
+    char path[SCRATCH_PATH_SIZE];
+    scratch_path(path, sizeof path, "hairobb_test_scenes.hair");
     if (!write_file(path, data, size)) {
         printf("     (cannot write %s)\n", path);
         return 99;
@@ -418,8 +420,8 @@ static void test_hair_format(void)
         scene_put_le_f32(file + 132 + 12 * i + 8, 2.0f);
         scene_put_le_f32(file + 132 + 60 + 4 * i, 0.2f);
     }
-    char path[128];
-    snprintf(path, sizeof path, "/tmp/hairobb_test_scenes_%ld_small.hair", (long)getpid());
+    char path[SCRATCH_PATH_SIZE];
+    scratch_path(path, sizeof path, "hairobb_test_scenes_small.hair");
     hair_scene s;
     int result = write_file(path, file, sizeof file) ? scene_load_hair(&s, path) : 99;
     remove(path);
@@ -430,7 +432,8 @@ static void test_hair_format(void)
         check_report(strncmp(s.name, "hairobb_test_scenes_", 20) == 0 && strchr(s.name, '.') == NULL, "hair: scene named after the file (%s)", s.name);
     scene_free(&s);
 
-    check_report(scene_load_hair(&s, "/tmp/hairobb_no_such_file.hair") == -1, "hair: missing file reports -1 (absent)");
+    check_report(scene_load_hair(&s, scratch_path(path, sizeof path, "no_such_file.hair")) == -1,
+                 "hair: missing file reports -1 (absent)");
 }
 
 static void test_straight_hair(const char *path)
@@ -465,7 +468,7 @@ static void test_straight_hair(const char *path)
         check_report(0, "straight.hair: read for corruption tests");
         return;
     }
-    check_report(load_variant(data, size) == 0, "straight.hair: an unchanged copy in /tmp loads");
+    check_report(load_variant(data, size) == 0, "straight.hair: an unchanged copy (a scratch file) loads");
     const size_t cuts[] = {0, 3, 64, 127, 128, 128 + 12 * 80000, 128 + 12 * 160000, size - 12, size - 1};
     for (size_t k = 0; k < sizeof cuts / sizeof cuts[0]; k++)
         check_report(load_variant(data, cuts[k]) > 0, "straight.hair: truncated to %zu bytes is rejected", cuts[k]);
@@ -519,7 +522,8 @@ static void test_furball(const char *path)
     print_bounds(&s);
     info("furBall_A: loaded (gunzip via popen) in %.3f s", seconds);
     scene_free(&s);
-    check_report(scene_load_furball(&s, "/tmp/hairobb_no_such_furball.bin.gz") == -1,
+    char missing[SCRATCH_PATH_SIZE];
+    check_report(scene_load_furball(&s, scratch_path(missing, sizeof missing, "no_such_furball.bin.gz")) == -1,
                  "furBall_A: missing file reports -1 (absent)");
 }
 
