@@ -132,25 +132,25 @@ $(B)/simd_%.o: tests/simd_variant.c tests/simd_variant.h hairobb.h | $(B)
 $(B)/test_simd: $(B)/simd_plain_w4.o $(B)/simd_sse_w4.o $(B)/simd_avx_w4.o $(B)/simd_dispatch_w4.o
 $(B)/test_simd_w8: $(B)/simd_plain_w8.o $(B)/simd_sse_w8.o $(B)/simd_avx_w8.o $(B)/simd_dispatch_w8.o
 
-# libFuzzer targets (clang): `make test` runs each for some seconds over
-# its seeds (tests/fuzz_corpus/), `make fuzz` for a long run
-$(B)/fuzz_%: tests/fuzz_%.c tests/fuzz_checks.h hairobb.h | $(B) deps
+# libFuzzer targets (tests/fuzz/, clang): `make test` runs each for some
+# seconds over its seeds (tests/fuzz/corpus/), `make fuzz` for a long run
+$(B)/fuzz_%: tests/fuzz/fuzz_%.c tests/fuzz/fuzz_checks.h hairobb.h | $(B) deps
 	$(FUZZCC) $(FUZZ) $< -o $@ $(LIBS)
 # saved BVHs, checksum fixed up, loaded over a fixed scene (scenes.h)
 $(B)/fuzz_load: tests/scenes.h
 # a script running fuzzer $< over corpus $(1) for $(2) seconds
-fuzz_script = @printf '\#!/bin/sh\nexec sh tests/fuzz_run.sh $< tests/fuzz_corpus/$(1) $(2)\n' > $@ && chmod +x $@
-$(B)/fuzz_build_60s: $(B)/fuzz_build tests/fuzz_run.sh
+fuzz_script = @printf '\#!/bin/sh\nexec sh tests/fuzz/fuzz_run.sh $< tests/fuzz/corpus/$(1) $(2)\n' > $@ && chmod +x $@
+$(B)/fuzz_build_60s: $(B)/fuzz_build tests/fuzz/fuzz_run.sh
 	$(call fuzz_script,bvh_build,60)
-$(B)/fuzz_hair_30s: $(B)/fuzz_hair tests/fuzz_run.sh
+$(B)/fuzz_hair_30s: $(B)/fuzz_hair tests/fuzz/fuzz_run.sh
 	$(call fuzz_script,hair_read,30)
-$(B)/fuzz_load_30s: $(B)/fuzz_load tests/fuzz_run.sh
+$(B)/fuzz_load_30s: $(B)/fuzz_load tests/fuzz/fuzz_run.sh
 	$(call fuzz_script,bvh_load,30)
 # long runs: FUZZ_SECONDS each
 fuzz: $(B)/fuzz_build $(B)/fuzz_hair $(B)/fuzz_load
-	sh tests/fuzz_run.sh $(B)/fuzz_build tests/fuzz_corpus/bvh_build $(FUZZ_SECONDS)
-	sh tests/fuzz_run.sh $(B)/fuzz_hair tests/fuzz_corpus/hair_read $(FUZZ_SECONDS)
-	sh tests/fuzz_run.sh $(B)/fuzz_load tests/fuzz_corpus/bvh_load $(FUZZ_SECONDS)
+	sh tests/fuzz/fuzz_run.sh $(B)/fuzz_build tests/fuzz/corpus/bvh_build $(FUZZ_SECONDS)
+	sh tests/fuzz/fuzz_run.sh $(B)/fuzz_hair tests/fuzz/corpus/hair_read $(FUZZ_SECONDS)
+	sh tests/fuzz/fuzz_run.sh $(B)/fuzz_load tests/fuzz/corpus/bvh_load $(FUZZ_SECONDS)
 
 # the bench, and its two builds for `make profile` (below)
 BENCH_FLAGS_bench         = -DBENCH_CFLAGS='"$(BASE) $(ARCH)"'
