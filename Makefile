@@ -48,67 +48,74 @@ deps:
 $(B):
 	@mkdir -p $(B)
 
-$(B)/test_reference: tests/test_reference.c tests/reference.h | $(B)
-	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
-
-# white-box tests on 4-wide and on 8-wide nodes
-# (their counting allocators lock a pthread mutex: builds allocate on several threads)
-$(B)/test_unit: tests/test_unit.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
-	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=4 $< -o $@ $(LIBS) -lpthread
-
-$(B)/test_unit_w8: tests/test_unit.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
-	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=8 $< -o $@ $(LIBS) -lpthread
-
-# refit: a tree built on one pose refitted to others, against fresh builds and the reference (8- and 4-wide)
-$(B)/test_refit: tests/test_refit.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
-	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=8 $< -o $@ $(LIBS)
-$(B)/test_refit_w4: tests/test_refit.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
-	$(CC) $(BASE) $(ARCH) -DHAIROBB_NODE_WIDTH=4 $< -o $@ $(LIBS)
-
-# motion blur: moving fur at random ray times against the reference, errors, refit, save/load
-$(B)/test_motion: tests/test_motion.c hairobb.h tests/reference.h tests/ref_bases.h tests/test_data.h tests/check.h | $(B)
-	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS) -lpthread
-
-# black-box: every combination of build options against the reference
-$(B)/test_options: tests/test_options.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
-	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS) -lpthread
-
-# threads: builds on 1 and 4 threads equal, 4 threads tracing one BVH
-$(B)/test_threads: tests/test_threads.c hairobb.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
-	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
-
-$(B)/asan_test_reference: tests/test_reference.c tests/reference.h | $(B)
-	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
-$(B)/asan_test_unit_w8: tests/test_unit.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
-	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) -DHAIROBB_NODE_WIDTH=8 $< -o $@ $(LIBS)
-$(B)/asan_test_options: tests/test_options.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
-	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) -DCROSSED_RAYS=1024 $< -o $@ $(LIBS)
-$(B)/asan_test_stress: tests/test_stress.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
-	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
+# ---- Test programs ---------------------------------------------------------
+# What each checks (the comment at the top of its source says more):
+#   test_reference     the double-precision reference intersector itself
+#   test_unit          white-box: frames, hair space, node bounds, traversal,
+#                      bad input, failing allocations, cancelling
+#   test_options       every combination of build options against the reference
+#   test_conservative  traversal conservativeness: an instrumented header
+#                      records the leaves reached
+#   test_stress        numerical stress: radii, degenerate segments, hard rays, joints
+#   test_refit         a tree built on one pose refitted to others, against
+#                      fresh builds and the reference
+#   test_motion        motion blur: moving fur at random ray times against the
+#                      reference, errors, refit, save/load
+#   test_filter        the any-hit filter against the reference
+#   test_save          BVHs saved and loaded: round trips traced to the bit, bad
+#                      bytes, other hair
+#   test_hair          the .hair reader against the tests' own, bad files, a BVH
+#                      from a loaded file
+#   test_simd          the tracing code compiled four ways (below), to the bit
+#   test_threads       builds on 1 and 4 threads equal, 4 threads tracing one BVH
+#   test_secondary     secondary rays leaving a hit: the self-intersection rule,
+#                      contact shadows
+#   test_accuracy      t and hit/miss against the reference and Embree
+#   test_far           hair far from the origin
+#   test_bases         curve bases against Embree's flat curves of each basis
+#                      and the reference
+#   test_scenes        the tests' scenes, .hair loader and Embree wrapper
+# A second build of one source is named by what differs: _w4/_w8 the node
+# width, check_ without Embree (make check), asan_/tsan_ under a sanitizer.
+# Every test program depends on the header and every shared test header;
+# its flags beyond the build's own are TEST_FLAGS_<name>.
+TEST_HEADERS = hairobb.h tests/check.h tests/test_alloc.h tests/test_data.h tests/scratch.h tests/reference.h \
+               tests/ref_bases.h tests/scenes.h tests/embree_wrap.h
+TEST_FLAGS_test_unit            = -DHAIROBB_NODE_WIDTH=4
+TEST_FLAGS_test_unit_w8         = -DHAIROBB_NODE_WIDTH=8
+TEST_FLAGS_test_refit           = -DHAIROBB_NODE_WIDTH=8
+TEST_FLAGS_test_refit_w4        = -DHAIROBB_NODE_WIDTH=4
+TEST_FLAGS_check_test_secondary = -DTESTS_NO_EMBREE
+TEST_FLAGS_asan_test_unit_w8    = -DHAIROBB_NODE_WIDTH=8
+TEST_FLAGS_asan_test_options    = -DCROSSED_RAYS=1024
 # 4-wide (test_save runs 8-wide), one scene's round trips: the loader's bounds under ASan
-$(B)/asan_test_save_w4: tests/test_save.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
-	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) -DHAIROBB_NODE_WIDTH=4 -DSAVE_SCENES=1 $< -o $@ $(LIBS)
-$(B)/tsan_test_threads: tests/test_threads.c hairobb.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
-	$(CC) $(WARN) $(TSAN) -ffp-contract=off -I. $(ARCH) $< -o $@ $(LIBS)
+TEST_FLAGS_asan_test_save_w4    = -DHAIROBB_NODE_WIDTH=4 -DSAVE_SCENES=1
+TEST_CC = $(CC) $(BASE) $(ARCH) $(TEST_FLAGS_$(@F)) $(filter %.c %.o,$^) -o $@
 
-$(B)/fuzz_%: tests/fuzz_%.c tests/fuzz_checks.h hairobb.h | $(B) deps
-	$(FUZZCC) $(FUZZ) $< -o $@ $(LIBS)
-$(B)/fuzz_build_60s: $(B)/fuzz_build tests/fuzz_run.sh
-	@printf '#!/bin/sh\nexec sh tests/fuzz_run.sh $(B)/fuzz_build tests/fuzz_corpus/bvh_build 60\n' > $@ && chmod +x $@
-$(B)/fuzz_hair_30s: $(B)/fuzz_hair tests/fuzz_run.sh
-	@printf '#!/bin/sh\nexec sh tests/fuzz_run.sh $(B)/fuzz_hair tests/fuzz_corpus/hair_read 30\n' > $@ && chmod +x $@
-# saved BVHs, checksum fixed up, loaded over a fixed scene (scenes.h)
-$(B)/fuzz_load: tests/scenes.h
-$(B)/fuzz_load_30s: $(B)/fuzz_load tests/fuzz_run.sh
-	@printf '#!/bin/sh\nexec sh tests/fuzz_run.sh $(B)/fuzz_load tests/fuzz_corpus/bvh_load 30\n' > $@ && chmod +x $@
-# long runs: FUZZ_SECONDS each
-fuzz: $(B)/fuzz_build $(B)/fuzz_hair $(B)/fuzz_load
-	sh tests/fuzz_run.sh $(B)/fuzz_build tests/fuzz_corpus/bvh_build $(FUZZ_SECONDS)
-	sh tests/fuzz_run.sh $(B)/fuzz_hair tests/fuzz_corpus/hair_read $(FUZZ_SECONDS)
-	sh tests/fuzz_run.sh $(B)/fuzz_load tests/fuzz_corpus/bvh_load $(FUZZ_SECONDS)
+# build/test_NAME from tests/test_NAME.c; a second build from the source named
+$(B)/test_%: tests/test_%.c $(TEST_HEADERS) | $(B)
+	$(TEST_CC) $(LIBS)
+$(B)/test_unit_w8 $(B)/test_refit_w4 $(B)/test_simd_w8 $(B)/check_test_secondary: $(TEST_HEADERS) | $(B)
+	$(TEST_CC) $(LIBS)
+$(B)/test_unit_w8 $(B)/asan_test_unit_w8: tests/test_unit.c
+$(B)/test_refit_w4: tests/test_refit.c
+$(B)/test_simd_w8: tests/test_simd.c
+$(B)/check_test_secondary: tests/test_secondary.c
+# those comparing with Embree
+$(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_bases $(B)/test_scenes: $(B)/%: tests/%.c $(TEST_HEADERS) | $(B) deps
+	$(TEST_CC) $(EMBREE) $(LIBS)
 
-$(B)/test_scenes: tests/test_scenes.c tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
-	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
+# under AddressSanitizer + UndefinedBehaviorSanitizer, and ThreadSanitizer:
+# -O1 and the sanitizer in place of CFLAGS
+$(B)/asan_%: $(TEST_HEADERS) | $(B)
+	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) $(TEST_FLAGS_$(@F)) $(filter %.c,$^) -o $@ $(LIBS)
+$(B)/tsan_%: $(TEST_HEADERS) | $(B)
+	$(CC) $(WARN) $(TSAN) -ffp-contract=off -I. $(ARCH) $(filter %.c,$^) -o $@ $(LIBS)
+$(B)/asan_test_reference: tests/test_reference.c
+$(B)/asan_test_options: tests/test_options.c
+$(B)/asan_test_stress: tests/test_stress.c
+$(B)/asan_test_save_w4: tests/test_save.c
+$(B)/tsan_test_threads: tests/test_threads.c
 
 # the same tracing code compiled four ways (plain C, SSE4.1, AVX2, and the
 # x86-64 baseline that dispatches to AVX2 at run time) for each node width:
@@ -122,46 +129,28 @@ simd_width = $(subst w,,$(word 2,$(subst _, ,$*)))
 .PRECIOUS: $(B)/simd_%.o
 $(B)/simd_%.o: tests/simd_variant.c tests/simd_variant.h hairobb.h | $(B)
 	$(CC) $(BASE) $(SIMD_FLAGS_$(simd_path)) -DHAIROBB_NODE_WIDTH=$(simd_width) -DVARIANT=trace_$(simd_path) -c $< -o $@
-$(B)/test_simd: tests/test_simd.c $(B)/simd_plain_w4.o $(B)/simd_sse_w4.o $(B)/simd_avx_w4.o $(B)/simd_dispatch_w4.o tests/scenes.h tests/test_data.h | $(B)
-	$(CC) $(BASE) $(ARCH) $(filter %.c %.o,$^) -o $@ $(LIBS)
-$(B)/test_simd_w8: tests/test_simd.c $(B)/simd_plain_w8.o $(B)/simd_sse_w8.o $(B)/simd_avx_w8.o $(B)/simd_dispatch_w8.o tests/scenes.h tests/test_data.h | $(B)
-	$(CC) $(BASE) $(ARCH) $(filter %.c %.o,$^) -o $@ $(LIBS)
+$(B)/test_simd: $(B)/simd_plain_w4.o $(B)/simd_sse_w4.o $(B)/simd_avx_w4.o $(B)/simd_dispatch_w4.o
+$(B)/test_simd_w8: $(B)/simd_plain_w8.o $(B)/simd_sse_w8.o $(B)/simd_avx_w8.o $(B)/simd_dispatch_w8.o
 
-$(B)/test_accuracy: tests/test_accuracy.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
-	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
-
-$(B)/test_far: tests/test_far.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
-	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
-
-# numerical stress: radii, degenerate segments, hard rays, joints
-$(B)/test_stress: tests/test_stress.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
-	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
-
-# traversal conservativeness: an instrumented header records the leaves reached
-$(B)/test_conservative: tests/test_conservative.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
-	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
-
-# curve bases against Embree's flat curves of each basis and the reference
-$(B)/test_bases: tests/test_bases.c hairobb.h tests/reference.h tests/ref_bases.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
-	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
-
-# the any-hit filter against the reference
-$(B)/test_filter: tests/test_filter.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
-	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
-
-# secondary rays leaving a hit: the self-intersection rule, contact shadows
-$(B)/test_secondary: tests/test_secondary.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
-	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
-$(B)/check_test_secondary: tests/test_secondary.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
-	$(CC) $(BASE) $(ARCH) -DTESTS_NO_EMBREE $< -o $@ $(LIBS)
-
-# BVHs saved and loaded: round trips traced to the bit, bad bytes, other hair
-$(B)/test_save: tests/test_save.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
-	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
-
-# the .hair reader against the tests' own, bad files, a BVH from a loaded file
-$(B)/test_hair: tests/test_hair.c hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/check.h | $(B)
-	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
+# libFuzzer targets (tests/fuzz/, clang): `make test` runs each for some
+# seconds over its seeds (tests/fuzz/corpus/), `make fuzz` for a long run
+$(B)/fuzz_%: tests/fuzz/fuzz_%.c tests/fuzz/fuzz_checks.h hairobb.h | $(B) deps
+	$(FUZZCC) $(FUZZ) $< -o $@ $(LIBS)
+# saved BVHs, checksum fixed up, loaded over a fixed scene (scenes.h)
+$(B)/fuzz_load: tests/scenes.h
+# a script running fuzzer $< over corpus $(1) for $(2) seconds
+fuzz_script = @printf '\#!/bin/sh\nexec sh tests/fuzz/fuzz_run.sh $< tests/fuzz/corpus/$(1) $(2)\n' > $@ && chmod +x $@
+$(B)/fuzz_build_60s: $(B)/fuzz_build tests/fuzz/fuzz_run.sh
+	$(call fuzz_script,bvh_build,60)
+$(B)/fuzz_hair_30s: $(B)/fuzz_hair tests/fuzz/fuzz_run.sh
+	$(call fuzz_script,hair_read,30)
+$(B)/fuzz_load_30s: $(B)/fuzz_load tests/fuzz/fuzz_run.sh
+	$(call fuzz_script,bvh_load,30)
+# long runs: FUZZ_SECONDS each
+fuzz: $(B)/fuzz_build $(B)/fuzz_hair $(B)/fuzz_load
+	sh tests/fuzz/fuzz_run.sh $(B)/fuzz_build tests/fuzz/corpus/bvh_build $(FUZZ_SECONDS)
+	sh tests/fuzz/fuzz_run.sh $(B)/fuzz_hair tests/fuzz/corpus/hair_read $(FUZZ_SECONDS)
+	sh tests/fuzz/fuzz_run.sh $(B)/fuzz_load tests/fuzz/corpus/bvh_load $(FUZZ_SECONDS)
 
 # the bench, and its two builds for `make profile` (below)
 BENCH_FLAGS_bench         = -DBENCH_CFLAGS='"$(BASE) $(ARCH)"'

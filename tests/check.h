@@ -1,12 +1,20 @@
-/* check.h - the tests' tiny harness: CHECK prints failures, check_skip a
+/* check.h - the tests' tiny harness: CHECK prints failures, check_report
+   every check (PASS or FAIL, for programs that list them all), check_skip a
    case that could not run, check_summary prints the closing line
    "N passed, M failed, K skipped" and gives the exit code. */
 #ifndef HAIROBB_TESTS_CHECK_H
 #define HAIROBB_TESTS_CHECK_H
 
+#include <stdarg.h>
 #include <stdio.h>
 
 #include "test_data.h"
+
+#if defined(__GNUC__) || defined(__clang__)
+#define CHECK_PRINTF_LIKE(format_index) __attribute__((format(printf, format_index, format_index + 1)))
+#else
+#define CHECK_PRINTF_LIKE(format_index)
+#endif
 
 static int check_passed, check_failed, check_skipped;
 
@@ -21,6 +29,23 @@ static int check_passed, check_failed, check_skipped;
             printf("\n");                                                 \
         }                                                                 \
     } while (0)
+
+/* One check's line, whatever its outcome: "PASS " or "FAIL " and the
+   message. */
+static inline void check_report(int ok, const char *format, ...) CHECK_PRINTF_LIKE(2);
+static inline void check_report(int ok, const char *format, ...)
+{
+    va_list args;
+    va_start(args, format);
+    printf("%s ", ok ? "PASS" : "FAIL");
+    vprintf(format, args);
+    printf("\n");
+    va_end(args);
+    if (ok)
+        ++check_passed;
+    else
+        ++check_failed;
+}
 
 static inline void check_skip(const char *why)
 {

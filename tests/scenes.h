@@ -872,6 +872,20 @@ static inline float scene_le_f32(const unsigned char *p)
     memcpy(&value, &bits, sizeof value);
     return value;
 }
+/* and encoding, for the tests that write .hair files */
+static inline void scene_put_le_u32(unsigned char *p, uint32_t value)
+{
+    p[0] = (unsigned char)value;
+    p[1] = (unsigned char)(value >> 8);
+    p[2] = (unsigned char)(value >> 16);
+    p[3] = (unsigned char)(value >> 24);
+}
+static inline void scene_put_le_f32(unsigned char *p, float value)
+{
+    uint32_t bits;
+    memcpy(&bits, &value, sizeof bits);
+    scene_put_le_u32(p, bits);
+}
 
 /* Cem Yuksel's .hair format: 128-byte header ("HAIR", strand count, point
    count, array flags, default segments, default thickness, default

@@ -12,52 +12,17 @@
 #include <unistd.h>
 #include <sys/stat.h>
 
-/* Counts live blocks and the largest request; fails the fail_at-th call. */
-typedef struct test_allocator {
-    long calls, fail_at, live;
-    size_t largest;
-} test_allocator;
-static void *test_malloc(size_t size, void *user)
-{
-    test_allocator *a = (test_allocator *)user;
-    void *p;
-    if (!a) return malloc(size);
-    if (size > a->largest) a->largest = size;
-    if (a->calls++ == a->fail_at) return NULL;
-    p = malloc(size);
-    if (p) {
-        memset(p, 0xa5, size);   /* what the reader does not write shows */
-        a->live++;
-    }
-    return p;
-}
-static void test_free(void *p, void *user)
-{
-    test_allocator *a = (test_allocator *)user;
-    if (p && a) a->live--;
-    free(p);
-}
-#define HAIROBB_MALLOC(size, user) test_malloc(size, user)
-#define HAIROBB_FREE(ptr, user) test_free(ptr, user)
+#include "test_alloc.h"   /* counts live blocks and fails the fail_at-th allocation */
 #define HAIROBB_IMPLEMENTATION
 #include "../hairobb.h"
 #include "check.h"
 #include "reference.h"
 #include "scenes.h"
+#include "scratch.h"
 
 /* ------------------------------------------------------------------------ */
 /* Writing .hair files */
 
-static void put_u32(unsigned char *p, uint32_t v)
-{
-    p[0] = (unsigned char)v; p[1] = (unsigned char)(v >> 8); p[2] = (unsigned char)(v >> 16); p[3] = (unsigned char)(v >> 24);
-}
-static void put_f32(unsigned char *p, float f)
-{
-    uint32_t bits;
-    memcpy(&bits, &f, sizeof bits);
-    put_u32(p, bits);
-}
 
 /* A file with `strands` strands of 1..6 points (or all of default_segments + 1
    points when the segments array is left out), the arrays of `flags`, and
@@ -84,24 +49,24 @@ static size_t write_hair(const hair_spec *spec, unsigned char **data)
            ((spec->flags & 16) ? 12 * (size_t)points : 0);
     p = (unsigned char *)calloc(size, 1);
     memcpy(p, "HAIR", 4);
-    put_u32(p + 4, spec->strands);
-    put_u32(p + 8, points);
-    put_u32(p + 12, spec->flags);
-    put_u32(p + 16, spec->default_segments);
-    put_f32(p + 20, spec->default_thickness);
-    put_f32(p + 24, 0.25f);
-    put_f32(p + 28, 0.5f); put_f32(p + 32, 0.75f); put_f32(p + 36, 1.0f);
+    scene_put_le_u32(p + 4, spec->strands);
+    scene_put_le_u32(p + 8, points);
+    scene_put_le_u32(p + 12, spec->flags);
+    scene_put_le_u32(p + 16, spec->default_segments);
+    scene_put_le_f32(p + 20, spec->default_thickness);
+    scene_put_le_f32(p + 24, 0.25f);
+    scene_put_le_f32(p + 28, 0.5f); scene_put_le_f32(p + 32, 0.75f); scene_put_le_f32(p + 36, 1.0f);
     strcpy((char *)p + 40, "written by test_hair");
     at = 128;
     if (spec->flags & 1)
         for (k = 0; k < spec->strands; ++k, at += 2) { p[at] = (unsigned char)(counts[k] - 1); p[at + 1] = 0; }
-    for (i = 0; i < 3 * (size_t)points; ++i, at += 4) put_f32(p + at, scene_rng_range(&rng, -10.0f, 10.0f));
+    for (i = 0; i < 3 * (size_t)points; ++i, at += 4) scene_put_le_f32(p + at, scene_rng_range(&rng, -10.0f, 10.0f));
     if (spec->flags & 4)
-        for (i = 0; i < points; ++i, at += 4) put_f32(p + at, scene_rng_range(&rng, 0.0f, 0.2f));
+        for (i = 0; i < points; ++i, at += 4) scene_put_le_f32(p + at, scene_rng_range(&rng, 0.0f, 0.2f));
     if (spec->flags & 8)
-        for (i = 0; i < points; ++i, at += 4) put_f32(p + at, scene_rng_float(&rng));
+        for (i = 0; i < points; ++i, at += 4) scene_put_le_f32(p + at, scene_rng_float(&rng));
     if (spec->flags & 16)
-        for (i = 0; i < 3 * (size_t)points; ++i, at += 4) put_f32(p + at, scene_rng_float(&rng));
+        for (i = 0; i < 3 * (size_t)points; ++i, at += 4) scene_put_le_f32(p + at, scene_rng_float(&rng));
     free(counts);
     *data = p;
     return size;
@@ -159,8 +124,7 @@ static int arrays_as_written(const hairobb_hair *h, const hair_spec *spec, const
 
 static hairobb_result read_counted(const unsigned char *data, size_t size, test_allocator *a, hairobb_hair *h)
 {
-    memset(a, 0, sizeof *a);
-    a->fail_at = -1;
+    test_allocator_init(a, -1);
     return hairobb_hair_read(data, size, a, h);
 }
 
@@ -265,33 +229,33 @@ static void test_lying_headers(void)
     do { memcpy(copy, source, source_size); statement; expect_error(copy, source_size, want, what); } while (0)
     MUTATE(data, size, copy[0] = 'h', HAIROBB_ERROR_INVALID_FILE, "bad magic");
     for (bit = 5; bit < 32; ++bit)
-        MUTATE(data, size, put_u32(copy + 12, scene_le_u32(copy + 12) | 1u << bit), HAIROBB_ERROR_INVALID_FILE, "a reserved flag bit");
-    MUTATE(data, size, put_u32(copy + 12, 1 | 4), HAIROBB_ERROR_INVALID_FILE, "no points array");
-    MUTATE(data, size, put_u32(copy + 12, 1 | 2 | 4 | 8), HAIROBB_ERROR_INVALID_FILE, "a flag for an array that is not there");
-    MUTATE(data, size, put_u32(copy + 12, 1 | 2), HAIROBB_ERROR_INVALID_FILE, "an array not flagged");
-    MUTATE(data, size, put_u32(copy + 4, 7), HAIROBB_ERROR_INVALID_FILE, "one strand more than the file holds");
-    MUTATE(data, size, put_u32(copy + 8, points + 1), HAIROBB_ERROR_INVALID_FILE, "one point more than the file holds");
+        MUTATE(data, size, scene_put_le_u32(copy + 12, scene_le_u32(copy + 12) | 1u << bit), HAIROBB_ERROR_INVALID_FILE, "a reserved flag bit");
+    MUTATE(data, size, scene_put_le_u32(copy + 12, 1 | 4), HAIROBB_ERROR_INVALID_FILE, "no points array");
+    MUTATE(data, size, scene_put_le_u32(copy + 12, 1 | 2 | 4 | 8), HAIROBB_ERROR_INVALID_FILE, "a flag for an array that is not there");
+    MUTATE(data, size, scene_put_le_u32(copy + 12, 1 | 2), HAIROBB_ERROR_INVALID_FILE, "an array not flagged");
+    MUTATE(data, size, scene_put_le_u32(copy + 4, 7), HAIROBB_ERROR_INVALID_FILE, "one strand more than the file holds");
+    MUTATE(data, size, scene_put_le_u32(copy + 8, points + 1), HAIROBB_ERROR_INVALID_FILE, "one point more than the file holds");
     MUTATE(data, size, copy[128] = (unsigned char)(copy[128] + 1), HAIROBB_ERROR_INVALID_FILE, "strand lengths that add up to more points");
     MUTATE(data, size, copy[128] = (unsigned char)(copy[128] - 1), HAIROBB_ERROR_INVALID_FILE, "strand lengths that add up to fewer points");
     MUTATE(data, size, copy[129] = 0xff, HAIROBB_ERROR_INVALID_FILE, "a strand of 65000 segments");
     for (i = 0; i < sizeof huge_counts / sizeof huge_counts[0]; ++i) {
-        MUTATE(data, size, put_u32(copy + 4, huge_counts[i]), HAIROBB_ERROR_INVALID_FILE, "a huge strand count");
-        MUTATE(data, size, put_u32(copy + 8, huge_counts[i]), HAIROBB_ERROR_INVALID_FILE, "a huge point count");
-        MUTATE(plain, plain_size, put_u32(copy + 4, huge_counts[i]), HAIROBB_ERROR_INVALID_FILE,
+        MUTATE(data, size, scene_put_le_u32(copy + 4, huge_counts[i]), HAIROBB_ERROR_INVALID_FILE, "a huge strand count");
+        MUTATE(data, size, scene_put_le_u32(copy + 8, huge_counts[i]), HAIROBB_ERROR_INVALID_FILE, "a huge point count");
+        MUTATE(plain, plain_size, scene_put_le_u32(copy + 4, huge_counts[i]), HAIROBB_ERROR_INVALID_FILE,
                "a huge strand count, default segments");
-        MUTATE(plain, plain_size, put_u32(copy + 16, huge_counts[i]), HAIROBB_ERROR_INVALID_FILE, "huge default segments");
+        MUTATE(plain, plain_size, scene_put_le_u32(copy + 16, huge_counts[i]), HAIROBB_ERROR_INVALID_FILE, "huge default segments");
     }
-    MUTATE(plain, plain_size, put_u32(copy + 16, 3), HAIROBB_ERROR_INVALID_FILE, "default segments that disagree with the points");
-    MUTATE(plain, plain_size, put_u32(copy + 4, 0), HAIROBB_ERROR_INVALID_FILE, "no strands but points");
-    MUTATE(plain, plain_size, put_f32(copy + 20, -0.1f), HAIROBB_ERROR_INVALID_GEOMETRY, "a negative default thickness");
-    MUTATE(plain, plain_size, put_f32(copy + 20, NAN), HAIROBB_ERROR_INVALID_GEOMETRY, "a NaN default thickness");
-    MUTATE(data, size, put_f32(copy + 20, NAN), HAIROBB_OK, "a NaN default thickness the thickness array overrides");
-    MUTATE(data, size, put_f32(copy + 128 + 12 + 4, INFINITY), HAIROBB_ERROR_INVALID_GEOMETRY, "an infinite coordinate");
-    MUTATE(data, size, put_f32(copy + 128 + 12 + 8, NAN), HAIROBB_ERROR_INVALID_GEOMETRY, "a NaN coordinate");
-    MUTATE(data, size, put_f32(copy + 128 + 12, 1e30f), HAIROBB_ERROR_INVALID_GEOMETRY, "a coordinate beyond 1e18");
-    MUTATE(data, size, put_f32(copy + size - 4, -1.0f), HAIROBB_ERROR_INVALID_GEOMETRY, "a negative thickness");
-    MUTATE(data, size, put_f32(copy + size - 4, NAN), HAIROBB_ERROR_INVALID_GEOMETRY, "a NaN thickness");
-    MUTATE(plain, plain_size, put_f32(copy + plain_size - 4, INFINITY), HAIROBB_ERROR_INVALID_FILE, "an infinite colour");
+    MUTATE(plain, plain_size, scene_put_le_u32(copy + 16, 3), HAIROBB_ERROR_INVALID_FILE, "default segments that disagree with the points");
+    MUTATE(plain, plain_size, scene_put_le_u32(copy + 4, 0), HAIROBB_ERROR_INVALID_FILE, "no strands but points");
+    MUTATE(plain, plain_size, scene_put_le_f32(copy + 20, -0.1f), HAIROBB_ERROR_INVALID_GEOMETRY, "a negative default thickness");
+    MUTATE(plain, plain_size, scene_put_le_f32(copy + 20, NAN), HAIROBB_ERROR_INVALID_GEOMETRY, "a NaN default thickness");
+    MUTATE(data, size, scene_put_le_f32(copy + 20, NAN), HAIROBB_OK, "a NaN default thickness the thickness array overrides");
+    MUTATE(data, size, scene_put_le_f32(copy + 128 + 12 + 4, INFINITY), HAIROBB_ERROR_INVALID_GEOMETRY, "an infinite coordinate");
+    MUTATE(data, size, scene_put_le_f32(copy + 128 + 12 + 8, NAN), HAIROBB_ERROR_INVALID_GEOMETRY, "a NaN coordinate");
+    MUTATE(data, size, scene_put_le_f32(copy + 128 + 12, 1e30f), HAIROBB_ERROR_INVALID_GEOMETRY, "a coordinate beyond 1e18");
+    MUTATE(data, size, scene_put_le_f32(copy + size - 4, -1.0f), HAIROBB_ERROR_INVALID_GEOMETRY, "a negative thickness");
+    MUTATE(data, size, scene_put_le_f32(copy + size - 4, NAN), HAIROBB_ERROR_INVALID_GEOMETRY, "a NaN thickness");
+    MUTATE(plain, plain_size, scene_put_le_f32(copy + plain_size - 4, INFINITY), HAIROBB_ERROR_INVALID_FILE, "an infinite colour");
 #undef MUTATE
     expect_error(NULL, 0, HAIROBB_ERROR_INVALID_ARGUMENT, "no data");
     CHECK(hairobb_hair_read(data, size, NULL, NULL) == HAIROBB_ERROR_INVALID_ARGUMENT, "no hairobb_hair");
@@ -309,27 +273,25 @@ static void test_allocation_failure(void)
     size_t size = write_hair(&spec, &data);
     long fail_at, calls;
     int right = 1;
-    char path[128];
+    char path[SCRATCH_PATH_SIZE];
     FILE *file;
     hairobb_hair h;
     test_allocator a;
     CHECK(read_counted(data, size, &a, &h) == HAIROBB_OK, "allocation count run");
     hairobb_hair_free(&h);
     calls = a.calls;
-    snprintf(path, sizeof path, "/tmp/hairobb_test_hair_%ld.hair", (long)getpid());
+    scratch_path(path, sizeof path, "allocation_failure.hair");
     file = fopen(path, "wb");
     fwrite(data, 1, size, file);
     fclose(file);
     for (fail_at = 0; fail_at < calls + 1; ++fail_at) {
         hairobb_result r, from_file;
-        memset(&a, 0, sizeof a);
-        a.fail_at = fail_at;
+        test_allocator_init(&a, fail_at);
         if (fail_at < calls) {
             r = hairobb_hair_read(data, size, &a, &h);
             if (r != HAIROBB_ERROR_OUT_OF_MEMORY || a.live != 0 || h.vertices) right = 0;
         }
-        memset(&a, 0, sizeof a);
-        a.fail_at = fail_at;
+        test_allocator_init(&a, fail_at);
         from_file = hairobb_hair_load(path, &a, &h);   /* one allocation more: the file's bytes */
         if (from_file != HAIROBB_ERROR_OUT_OF_MEMORY || a.live != 0 || h.vertices) right = 0;
     }
@@ -344,18 +306,17 @@ static void test_files(void)
     hair_spec spec = {12, 1 | 2 | 4 | 8 | 16, 0, 0.1f, 11};
     unsigned char *data;
     size_t size = write_hair(&spec, &data);
-    char path[128], dir[128];
+    char path[SCRATCH_PATH_SIZE], dir[SCRATCH_PATH_SIZE];
     FILE *file;
     hairobb_hair h, from_memory;
     test_allocator a, b;
     hairobb_result r;
-    snprintf(path, sizeof path, "/tmp/hairobb_test_hair_%ld.hair", (long)getpid());
-    snprintf(dir, sizeof dir, "/tmp/hairobb_test_hair_%ld.dir", (long)getpid());
+    scratch_path(path, sizeof path, "files.hair");
+    scratch_path(dir, sizeof dir, "files.dir");
     file = fopen(path, "wb");
     fwrite(data, 1, size, file);
     fclose(file);
-    memset(&a, 0, sizeof a);
-    a.fail_at = -1;
+    test_allocator_init(&a, -1);
     r = hairobb_hair_load(path, &a, &h);
     CHECK(r == HAIROBB_OK && read_counted(data, size, &b, &from_memory) == HAIROBB_OK &&
           h.vertex_count == from_memory.vertex_count && h.segment_count == from_memory.segment_count &&
@@ -371,12 +332,11 @@ static void test_files(void)
     CHECK(truncate(path, 100) == 0 && hairobb_hair_load(path, NULL, &h) == HAIROBB_ERROR_INVALID_FILE, "a file shorter than its header");
     /* a header announcing 2^32-1 points in a file of 128 bytes: an error
        before anything that large is allocated */
-    put_u32(data + 8, 0xffffffffu);
+    scene_put_le_u32(data + 8, 0xffffffffu);
     file = fopen(path, "wb");
     fwrite(data, 1, 128, file);
     fclose(file);
-    memset(&a, 0, sizeof a);
-    a.fail_at = -1;
+    test_allocator_init(&a, -1);
     r = hairobb_hair_load(path, &a, &h);
     CHECK(r == HAIROBB_ERROR_INVALID_FILE && a.largest == 0, "a header announcing 4G points in 128 bytes: %s, largest allocation %zu",
           hairobb_result_string(r), a.largest);

@@ -20,31 +20,16 @@
    no BVH and no leak) and invalid option values. Only the public API and
    the allocation macros are used. */
 #define _POSIX_C_SOURCE 200809L
-#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
-/* Counts live allocations, to show cancelled builds leak nothing (the
-   build may allocate on several threads: a lock guards the count). */
-static long live_allocations;
-static pthread_mutex_t live_lock = PTHREAD_MUTEX_INITIALIZER;
-static void *count_malloc(size_t size)
-{
-    void *p = malloc(size);
-    pthread_mutex_lock(&live_lock);
-    if (p) ++live_allocations;
-    pthread_mutex_unlock(&live_lock);
-    return p;
-}
-static void count_free(void *p)
-{
-    pthread_mutex_lock(&live_lock);
-    if (p) --live_allocations;
-    pthread_mutex_unlock(&live_lock);
-    free(p);
-}
-#define HAIROBB_MALLOC(size, user) ((void)(user), count_malloc(size))
-#define HAIROBB_FREE(ptr, user) ((void)(user), count_free(ptr))
+/* Every allocation counted in one allocator, whatever allocator_user says,
+   to show cancelled builds leak nothing (test_alloc.h: the build may
+   allocate on several threads, it locks). */
+#define HAIROBB_MALLOC(size, user) ((void)(user), test_malloc(size, &counted))
+#define HAIROBB_FREE(ptr, user) ((void)(user), test_free(ptr, &counted))
+#include "test_alloc.h"
+static test_allocator counted;   /* fails none: main sets fail_at = -1 */
 #define HAIROBB_IMPLEMENTATION
 #include "../hairobb.h"
 #include "check.h"
@@ -359,7 +344,7 @@ static void test_progress(const hair_scene *s)
     hairobb_stats with, without;
     hairobb_result r;
     int set, cancel;
-    long live_before = live_allocations;
+    long live_before = counted.live;
     double t0 = scene_now();
     for (set = 0; set < PROGRESS_SETS; ++set) {
         r = build_with_progress(s, set, &log, -1, &bvh);
@@ -384,8 +369,8 @@ static void test_progress(const hair_scene *s)
         }
         hairobb_free(bvh);
         hairobb_free(plain);
-        CHECK(live_allocations == live_before, "%s, progress options %d: %ld allocations leaked", s->name, set,
-              live_allocations - live_before);
+        CHECK(counted.live == live_before, "%s, progress options %d: %ld allocations leaked", s->name, set,
+              counted.live - live_before);
     }
 
     /* cancelling a build with spatial splits at the first, a middle and the closing call */
@@ -395,8 +380,8 @@ static void test_progress(const hair_scene *s)
               hairobb_result_string(r), (void *)bvh);
         CHECK(log.cancelled_at >= 0 && log.calls == log.cancelled_at + 1, "%s: cancel at %s (call %d): called %d times", s->name,
               cancel_names[cancel], log.cancelled_at, log.calls);
-        CHECK(live_allocations == live_before, "%s: cancel at %s: %ld allocations leaked", s->name, cancel_names[cancel],
-              live_allocations - live_before);
+        CHECK(counted.live == live_before, "%s: cancel at %s: %ld allocations leaked", s->name, cancel_names[cancel],
+              counted.live - live_before);
         if (r == HAIROBB_OK) hairobb_free(bvh);
     }
     if (s->segment_count > 2048) test_progress_in_top(s);
@@ -414,7 +399,7 @@ static void test_invalid_options(const hair_scene *s)
     hairobb_bvh *bvh;
     size_t i;
     int field;
-    long live_before = live_allocations;
+    long live_before = counted.live;
     for (i = 0; i < sizeof bad_budgets / sizeof bad_budgets[0]; ++i) {
         int spatial;
         for (spatial = 0; spatial < 3; ++spatial) {
@@ -466,7 +451,7 @@ static void test_invalid_options(const hair_scene *s)
             if (r == HAIROBB_OK) hairobb_free(bvh);
         }
     }
-    CHECK(live_allocations == live_before, "%ld allocations leaked by the invalid-option tests", live_allocations - live_before);
+    CHECK(counted.live == live_before, "%ld allocations leaked by the invalid-option tests", counted.live - live_before);
 }
 
 /* Rays on the crossed bundles, the slowest scene to trace (hundreds of
@@ -480,6 +465,7 @@ int main(void)
 {
     hair_scene s;
     double t0 = scene_now();
+    test_allocator_init(&counted, -1);
     CHECK(scene_crossed(&s, 1200, 5) == 0, "crossed scene");
     test_invalid_options(&s);
     test_progress(&s);
@@ -493,7 +479,7 @@ int main(void)
     test_progress(&s);
     check_scene(&s, 8192, 0, 0);
     scene_free(&s);
-    CHECK(live_allocations == 0, "%ld allocations live at the end", live_allocations);
+    CHECK(counted.live == 0, "%ld allocations live at the end", counted.live);
     printf("test_options: %.1f s\n", scene_now() - t0);
     return check_summary();
 }

@@ -6,6 +6,7 @@
  * finder, and BVH-vs-brute-force equality on random scenes near the origin
  * and translated to 1e5. Prints one line per check, then "N passed, M failed, 0 skipped".
  */
+#include "check.h"
 #include "reference.h"
 
 #include <float.h>
@@ -14,15 +15,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-static int g_passed, g_failed;
-
+/* One line per check: "PASS name", or "FAIL name : detail". */
 static void check(int ok, const char *name, const char *detail)
 {
-    if (ok)
-        ++g_passed;
-    else
-        ++g_failed;
-    printf("%s %s%s%s\n", ok ? "PASS" : "FAIL", name, (!ok && detail) ? " : " : "", (!ok && detail) ? detail : "");
+    check_report(ok, "%s%s%s", name, (!ok && detail) ? " : " : "", (!ok && detail) ? detail : "");
 }
 
 static int near_abs(double a, double b, double tol)
@@ -732,6 +728,5 @@ int main(void)
     compare_nearest("random scene at 1e5", 1e5);
     compare_all_hits("random scene", 0.0);
     compare_all_hits("random scene at 1e5", 1e5);
-    printf("%d passed, %d failed, 0 skipped\n", g_passed, g_failed);
-    return g_failed ? 1 : 0;
+    return check_summary();
 }

@@ -29,33 +29,13 @@
 #include <string.h>
 #include <unistd.h>
 
-/* counts live blocks and fails the fail_at-th allocation (single thread:
-   the builds here use threads = 1) */
-typedef struct test_allocator { long calls, fail_at, live; size_t largest; } test_allocator;
-static void *test_malloc(size_t size, void *user)
-{
-    test_allocator *a = (test_allocator *)user;
-    void *p;
-    if (!a) return malloc(size);
-    if (size > a->largest) a->largest = size;
-    if (a->calls++ == a->fail_at) return NULL;
-    p = malloc(size);
-    if (p) { memset(p, 0xa5, size); a->live++; }
-    return p;
-}
-static void test_free(void *p, void *user)
-{
-    test_allocator *a = (test_allocator *)user;
-    if (p && a) a->live--;
-    free(p);
-}
-#define HAIROBB_MALLOC(size, user) test_malloc(size, user)
-#define HAIROBB_FREE(ptr, user) test_free(ptr, user)
+#include "test_alloc.h"   /* counts live blocks and fails the fail_at-th allocation */
 #define HAIROBB_IMPLEMENTATION
 #include "../hairobb.h"
 #include "check.h"
 #include "reference.h"
 #include "scenes.h"
+#include "scratch.h"
 
 /* ------------------------------------------------------------------------ */
 /* Rays and comparisons */
@@ -1049,8 +1029,7 @@ static void failing_allocations(void)
         opt.threads = 1;
         CHECK(hairobb_build(in.vertices, in.vertex_count, in.indices, in.segment_count, &opt, &bvh) == HAIROBB_OK, "build");
         blob = save_of(bvh, &size);
-        memset(&a, 0, sizeof a);
-        a.fail_at = -1;
+        test_allocator_init(&a, -1);
         opt.allocator_user = &a;
         CHECK(load_of(blob, size, &in, &opt, &loaded) == HAIROBB_OK, "counting load");
         hairobb_free(loaded);
@@ -1058,8 +1037,7 @@ static void failing_allocations(void)
         CHECK(a.live == 0 && allocations >= 3, "a load makes %ld allocations, %ld live after free", allocations, a.live);
         for (fail_at = 0; fail_at < allocations; ++fail_at) {
             hairobb_result r;
-            memset(&a, 0, sizeof a);
-            a.fail_at = fail_at;
+            test_allocator_init(&a, fail_at);
             loaded = NULL;
             r = load_of(blob, size, &in, &opt, &loaded);
             if (r != HAIROBB_ERROR_OUT_OF_MEMORY || loaded || a.live != 0) {
@@ -1071,12 +1049,11 @@ static void failing_allocations(void)
         CHECK(bad == 0, "%s: %ld of %ld failing allocations not out of memory without a leak", b ? "hermite" : "bezier", bad, allocations);
         /* save_file's one allocation */
         {
-            char path[64];
+            char path[SCRATCH_PATH_SIZE];
             hairobb_bvh *counted = NULL;
-            memset(&a, 0, sizeof a);
-            a.fail_at = -1;
+            test_allocator_init(&a, -1);
             CHECK(load_of(blob, size, &in, &opt, &counted) == HAIROBB_OK, "counting load");
-            snprintf(path, sizeof path, "/tmp/hairobb_test_save_%ld.bvh", (long)getpid());
+            scratch_path(path, sizeof path, "never_written.bvh");
             a.calls = 0;
             a.fail_at = 0;
             CHECK(hairobb_save_file(counted, path) == HAIROBB_ERROR_OUT_OF_MEMORY, "save_file out of memory");
@@ -1124,11 +1101,11 @@ static void files(void)
     hairobb_bvh *bvh = NULL, *loaded = NULL;
     unsigned char *blob, *read_back;
     size_t size, got;
-    char path[64];
+    char path[SCRATCH_PATH_SIZE];
     FILE *f;
     hairobb_result r;
     CHECK(scene_combed(&s, 500, 61) == 0, "scene");
-    snprintf(path, sizeof path, "/tmp/hairobb_test_save_%ld.bvh", (long)getpid());
+    scratch_path(path, sizeof path, "files.bvh");
     CHECK(hairobb_build(s.vertices, s.vertex_count, s.indices, s.segment_count, NULL, &bvh) == HAIROBB_OK, "build");
     blob = save_of(bvh, &size);
     r = hairobb_save_file(bvh, path);
@@ -1157,7 +1134,7 @@ static void files(void)
     remove(path);
     r = hairobb_load_file(path, s.vertices, s.vertex_count, s.indices, s.segment_count, NULL, &loaded);
     CHECK(r == HAIROBB_ERROR_IO && !loaded, "a missing file: %s", hairobb_result_string(r));
-    r = hairobb_load_file("/tmp", s.vertices, s.vertex_count, s.indices, s.segment_count, NULL, &loaded);
+    r = hairobb_load_file(scratch_dir(), s.vertices, s.vertex_count, s.indices, s.segment_count, NULL, &loaded);
     CHECK(r == HAIROBB_ERROR_IO && !loaded, "a directory: %s", hairobb_result_string(r));
     r = hairobb_load_file("/dev/null", s.vertices, s.vertex_count, s.indices, s.segment_count, NULL, &loaded);
     CHECK(r == HAIROBB_ERROR_INVALID_FILE && !loaded, "an empty file: %s", hairobb_result_string(r));
@@ -1171,8 +1148,7 @@ static void files(void)
         reseal(lying, size);
         f = fopen(path, "wb");
         if (f) { fwrite(lying, 1, size, f); fclose(f); }
-        memset(&a, 0, sizeof a);
-        a.fail_at = -1;
+        test_allocator_init(&a, -1);
         memset(&counted, 0, sizeof counted);
         counted.allocator_user = &a;
         r = hairobb_load_file(path, s.vertices, s.vertex_count, s.indices, s.segment_count, &counted, &loaded);

@@ -1,8 +1,9 @@
 /* test_scenes.c - checks the test support code (tests/scenes.h and
  * tests/embree_wrap.h) before it is trusted to judge hairobb.
  *
- *   gcc -std=c99 -O2 -Wall -Wextra -pedantic tests/test_scenes.c -o /tmp/test_scenes -lembree3 -lm
- *   /tmp/test_scenes     (straight.hair found by tests/test_data.h's rule)
+ *   gcc -std=c99 -O2 -Wall -Wextra -pedantic tests/test_scenes.c -o build/test_scenes -lembree3 -lm
+ *   build/test_scenes     (from the repository root: straight.hair found by
+ *                          tests/test_data.h's rule, files written in build/)
  *
  * Prints PASS/FAIL per check, SKIP for data that is absent, indented info
  * lines (counts, bounds, Embree build cost, camera hit fractions), and last
@@ -20,29 +21,9 @@
 #include "check.h"
 #include "embree_wrap.h"
 #include "scenes.h"
+#include "scratch.h"
 
-#if defined(__GNUC__) || defined(__clang__)
-#define TEST_PRINTF_LIKE(format_index) __attribute__((format(printf, format_index, format_index + 1)))
-#else
-#define TEST_PRINTF_LIKE(format_index)
-#endif
-
-static void check(int ok, const char *format, ...) TEST_PRINTF_LIKE(2);
-static void info(const char *format, ...) TEST_PRINTF_LIKE(1);
-
-static void check(int ok, const char *format, ...)
-{
-    va_list args;
-    va_start(args, format);
-    printf("%s ", ok ? "PASS" : "FAIL");
-    vprintf(format, args);
-    printf("\n");
-    va_end(args);
-    if (ok)
-        check_passed++;
-    else
-        check_failed++;
-}
+static void info(const char *format, ...) CHECK_PRINTF_LIKE(1);
 
 static void info(const char *format, ...)
 {
@@ -100,31 +81,31 @@ static void test_catmull_rom(void)
     };
     hair_scene s;
     int result = scene_from_polylines(&s, points, counts, 3, "hand-made");
-    check(result == 0 && s.segment_count == 4 && s.vertex_count == 16,
-          "catmull-rom: 3 strands (3, 1, 3 points) give 4 segments (got %zu)", s.segment_count);
+    check_report(result == 0 && s.segment_count == 4 && s.vertex_count == 16,
+                 "catmull-rom: 3 strands (3, 1, 3 points) give 4 segments (got %zu)", s.segment_count);
     if (result != 0)
         return;
-    check(memcmp(s.vertices, expected_a, sizeof expected_a) == 0,
-          "catmull-rom: exact control points of the 3-point strand");
+    check_report(memcmp(s.vertices, expected_a, sizeof expected_a) == 0,
+                 "catmull-rom: exact control points of the 3-point strand");
     int continuous = 1;
     for (int c = 0; c < 4; c++) {
         float end_tangent = s.vertices[12 + c] - s.vertices[8 + c];  /* segment 0: P3 - P2 */
         float start_tangent = s.vertices[20 + c] - s.vertices[16 + c]; /* segment 1: P1 - P0 */
         continuous &= end_tangent == start_tangent;
     }
-    check(continuous, "catmull-rom: C1 at the joint (P3-P2 of segment 0 == P1-P0 of segment 1)");
-    check(s.vertices[32 + 11] == 0.0f && s.vertices[48 + 7] == 0.5f,
-          "catmull-rom: overshooting radius clamped to 0 (got %g), others kept (got %g)", s.vertices[32 + 11],
-          s.vertices[48 + 7]);
+    check_report(continuous, "catmull-rom: C1 at the joint (P3-P2 of segment 0 == P1-P0 of segment 1)");
+    check_report(s.vertices[32 + 11] == 0.0f && s.vertices[48 + 7] == 0.5f,
+                 "catmull-rom: overshooting radius clamped to 0 (got %g), others kept (got %g)", s.vertices[32 + 11],
+                 s.vertices[48 + 7]);
     float min_radius, max_radius;
-    check(scene_is_sane(&s, &min_radius, &max_radius), "catmull-rom: aligned vertices, indices 4*i, radii >= 0");
-    check(s.lower[0] == -3 && s.upper[0] == 8 && s.lower[1] == -4 && s.upper[1] == 12,
-          "catmull-rom: bounds are control points expanded by radius");
+    check_report(scene_is_sane(&s, &min_radius, &max_radius), "catmull-rom: aligned vertices, indices 4*i, radii >= 0");
+    check_report(s.lower[0] == -3 && s.upper[0] == 8 && s.lower[1] == -4 && s.upper[1] == 12,
+                 "catmull-rom: bounds are control points expanded by radius");
     scene_free(&s);
 
     const uint32_t single[] = {1, 1};
-    check(scene_from_polylines(&s, points, single, 2, "empty") != 0 && s.vertices == NULL,
-          "catmull-rom: strands without segments are an error");
+    check_report(scene_from_polylines(&s, points, single, 2, "empty") != 0 && s.vertices == NULL,
+                 "catmull-rom: strands without segments are an error");
 }
 
 typedef int (*scene_generator)(hair_scene *, size_t, uint64_t);
@@ -145,22 +126,22 @@ static void test_generators(void)
         int result_b = generators[g].generate(&b, target, 7);
         int result_c = generators[g].generate(&c, target, 8);
         if (result_a || result_b || result_c) {
-            check(0, "%s: generated", generators[g].name);
+            check_report(0, "%s: generated", generators[g].name);
         } else {
             double ratio = (double)a.segment_count / (double)target;
-            check(ratio > 0.9 && ratio < 1.1, "%s: %zu segments for a target of %zu", generators[g].name,
-                  a.segment_count, target);
+            check_report(ratio > 0.9 && ratio < 1.1, "%s: %zu segments for a target of %zu", generators[g].name,
+                         a.segment_count, target);
             int same = a.segment_count == b.segment_count &&
                        memcmp(a.vertices, b.vertices, 16 * a.vertex_count) == 0 &&
                        memcmp(a.indices, b.indices, 4 * a.segment_count) == 0 &&
                        memcmp(a.lower, b.lower, sizeof a.lower) == 0 &&
                        memcmp(a.upper, b.upper, sizeof a.upper) == 0 && strcmp(a.name, b.name) == 0;
-            check(same, "%s: same seed gives identical bytes", generators[g].name);
-            check(a.segment_count != c.segment_count || memcmp(a.vertices, c.vertices, 16 * a.vertex_count) != 0,
-                  "%s: another seed gives another scene", generators[g].name);
+            check_report(same, "%s: same seed gives identical bytes", generators[g].name);
+            check_report(a.segment_count != c.segment_count || memcmp(a.vertices, c.vertices, 16 * a.vertex_count) != 0,
+                         "%s: another seed gives another scene", generators[g].name);
             float min_radius, max_radius;
-            check(scene_is_sane(&a, &min_radius, &max_radius), "%s: finite, aligned, radii >= 0",
-                  generators[g].name);
+            check_report(scene_is_sane(&a, &min_radius, &max_radius), "%s: finite, aligned, radii >= 0",
+                         generators[g].name);
             print_bounds(&a);
             info("%s: radius %.4f..%.4f, generated in %.3f s", a.name, min_radius, max_radius, seconds);
         }
@@ -173,7 +154,7 @@ static void test_generators(void)
             tiny_ok &= generators[g].generate(&a, tiny, 1) == 0 && a.segment_count > 0;
             scene_free(&a);
         }
-        check(tiny_ok, "%s: tiny targets (0, 5, 10) give a non-empty scene", generators[g].name);
+        check_report(tiny_ok, "%s: tiny targets (0, 5, 10) give a non-empty scene", generators[g].name);
     }
 }
 
@@ -222,26 +203,26 @@ static void test_yeti(void)
     int result = scene_yeti(&a, target, 7);
     double seconds = scene_now() - start;
     result |= scene_yeti(&b, target, 7) | scene_yeti(&c, target, 8);
-    check(result == 0, "yeti: generated");
+    check_report(result == 0, "yeti: generated");
     if (result != 0)
         return;
     size_t strands = a.segment_count / SEGMENTS;
-    check(a.basis == SCENE_BASIS_CATMULL_ROM && a.segment_count == target && a.vertex_count == strands * POINTS &&
-              strcmp(a.name, "yeti") == 0,
-          "yeti: Catmull-Rom, %zu segments, %zu points (%zu strands of %d points)", a.segment_count, a.vertex_count,
-          strands, POINTS);
+    check_report(a.basis == SCENE_BASIS_CATMULL_ROM && a.segment_count == target && a.vertex_count == strands * POINTS &&
+                     strcmp(a.name, "yeti") == 0,
+                 "yeti: Catmull-Rom, %zu segments, %zu points (%zu strands of %d points)", a.segment_count, a.vertex_count,
+                 strands, POINTS);
     int indices_ok = 1, padding_ok = ((uintptr_t)a.vertices % 16) == 0;
     for (size_t k = 0; k < strands; k++)
         for (size_t j = 0; j < SEGMENTS; j++)
             indices_ok &= a.indices[SEGMENTS * k + j] == POINTS * k + j;
     for (int i = 0; i < 4; i++)
         padding_ok &= a.vertices[4 * a.vertex_count + (size_t)i] == 0.0f;
-    check(indices_ok, "yeti: segment j of strand k starts at point 19 k + j (its 4 points shared with neighbours)");
-    check(padding_ok, "yeti: vertices 16-byte aligned, 16 zero bytes after them");
-    check(memcmp(a.vertices, b.vertices, 16 * a.vertex_count) == 0 &&
-              memcmp(a.indices, b.indices, 4 * a.segment_count) == 0 && memcmp(a.lower, b.lower, sizeof a.lower) == 0,
-          "yeti: same seed gives identical bytes");
-    check(memcmp(a.vertices, c.vertices, 16 * a.vertex_count) != 0, "yeti: another seed gives another scene");
+    check_report(indices_ok, "yeti: segment j of strand k starts at point 19 k + j (its 4 points shared with neighbours)");
+    check_report(padding_ok, "yeti: vertices 16-byte aligned, 16 zero bytes after them");
+    check_report(memcmp(a.vertices, b.vertices, 16 * a.vertex_count) == 0 &&
+                     memcmp(a.indices, b.indices, 4 * a.segment_count) == 0 && memcmp(a.lower, b.lower, sizeof a.lower) == 0,
+                 "yeti: same seed gives identical bytes");
+    check_report(memcmp(a.vertices, c.vertices, 16 * a.vertex_count) != 0, "yeti: another seed gives another scene");
 
     /* each strand: finite points, root on the skin, nothing inside the
        body, 0.15-0.25 long, radius shrinking from root to tip */
@@ -279,21 +260,21 @@ static void test_yeti(void)
             largest = fmax(largest, fabs(mid[axis]) / sqrt(mid_length));
         diagonal += largest < 0.9;
     }
-    check(bad_strands == 0, "yeti: every strand finite, rooted on the capsule, outside it, 0.15-0.25 long, tapering "
-                            "(%zu not)", bad_strands);
+    check_report(bad_strands == 0, "yeti: every strand finite, rooted on the capsule, outside it, 0.15-0.25 long, tapering "
+                                   "(%zu not)", bad_strands);
     /* equal axial bands of a capsule have equal area (Archimedes), so an even cover puts as many roots in each */
     size_t fewest = strands, most = 0;
     for (int band = 0; band < BANDS; band++) {
         fewest = band_counts[band] < fewest ? band_counts[band] : fewest;
         most = band_counts[band] > most ? band_counts[band] : most;
     }
-    check(fewest > strands / BANDS * 95 / 100 && most < strands / BANDS * 105 / 100,
-          "yeti: roots even along the body: %zu-%zu of %zu strands in each of %d equal-area bands", fewest, most,
-          strands, BANDS);
+    check_report(fewest > strands / BANDS * 95 / 100 && most < strands / BANDS * 105 / 100,
+                 "yeti: roots even along the body: %zu-%zu of %zu strands in each of %d equal-area bands", fewest, most,
+                 strands, BANDS);
     /* directions uniform on the sphere have no component above 0.9 70% of the time; fur
        combed along a coordinate axis, hardly ever */
-    check(diagonal > strands * 6 / 10, "yeti: %zu of %zu strands run diagonally to the axes mid-way (no component "
-                                       "above 0.9; isotropic directions: 70%%)", diagonal, strands);
+    check_report(diagonal > strands * 6 / 10, "yeti: %zu of %zu strands run diagonally to the axes mid-way (no component "
+                                              "above 0.9; isotropic directions: 70%%)", diagonal, strands);
 
     /* the Bezier form against the Catmull-Rom polynomials, joints, bounds */
     int converted = 1, joints = 1, bounded = 1;
@@ -319,15 +300,15 @@ static void test_yeti(void)
         }
     }
     converted &= worst < 1e-6;
-    check(converted, "yeti: Bezier form runs from point 2 to point 3 and traces the Catmull-Rom polynomials "
-                     "(worst %.2g: absolute in position, relative in radius)", worst);
-    check(joints, "yeti: along a strand each segment starts where the last ended, to the bit");
-    check(bounded, "yeti: bounds hold the tube at 9 points of every segment");
+    check_report(converted, "yeti: Bezier form runs from point 2 to point 3 and traces the Catmull-Rom polynomials "
+                            "(worst %.2g: absolute in position, relative in radius)", worst);
+    check_report(joints, "yeti: along a strand each segment starts where the last ended, to the bit");
+    check_report(bounded, "yeti: bounds hold the tube at 9 points of every segment");
 
     result = scene_to_bezier(&a, &bezier);
-    check(result == 0 && bezier.basis == SCENE_BASIS_BEZIER && bezier.segment_count == a.segment_count &&
-              bezier.vertex_count == 4 * a.segment_count,
-          "yeti: scene_to_bezier makes %zu independent Bezier segments", bezier.segment_count);
+    check_report(result == 0 && bezier.basis == SCENE_BASIS_BEZIER && bezier.segment_count == a.segment_count &&
+                     bezier.vertex_count == 4 * a.segment_count,
+                 "yeti: scene_to_bezier makes %zu independent Bezier segments", bezier.segment_count);
     if (result == 0) {
         int same = 1;
         for (size_t i = 0; i < a.segment_count; i++) {
@@ -337,7 +318,7 @@ static void test_yeti(void)
         }
         for (int axis = 0; axis < 3; axis++)
             same &= bezier.lower[axis] == a.lower[axis] && bezier.upper[axis] == a.upper[axis];
-        check(same, "yeti: scene_to_bezier's segments and bounds are the scene's");
+        check_report(same, "yeti: scene_to_bezier's segments and bounds are the scene's");
 
         /* Embree reads the shared points as Catmull-Rom curves: the same hits as its Bezier curves on the copy */
         const int side = 256;
@@ -347,7 +328,7 @@ static void test_yeti(void)
                                              EMB_FLAT_CATMULL_ROM, NULL, 16, 0, NULL, NULL);
         emb_scene *copy = emb_build(bezier.vertices, bezier.vertex_count, bezier.indices, bezier.segment_count,
                                     EMB_FLAT_BEZIER, 16, 0, NULL, NULL);
-        check(curves && copy, "yeti: Embree builds flat Catmull-Rom curves on the shared points, and Bezier curves");
+        check_report(curves && copy, "yeti: Embree builds flat Catmull-Rom curves on the shared points, and Bezier curves");
         if (curves && copy && org && dir) {
             scene_camera_rays(&a, side, side, org, dir);
             for (size_t i = 0; i < rays; i++) {
@@ -364,10 +345,10 @@ static void test_yeti(void)
             }
             info("yeti: Embree Catmull-Rom against Bezier: %zu of %zu camera rays hit, %zu disagree, t within 1e-4 "
                  "on %zu of %zu same-segment hits", hits, rays, disagree, close, both);
-            check(hits > rays / 10, "yeti: %zu of %zu camera rays hit the fur", hits, rays);
-            check(disagree <= rays / 1000 && close >= both - both / 1000,
-                  "yeti: Embree's Catmull-Rom and Bezier curves agree: %zu hit/miss disagreements, t on %zu of %zu",
-                  disagree, close, both);
+            check_report(hits > rays / 10, "yeti: %zu of %zu camera rays hit the fur", hits, rays);
+            check_report(disagree <= rays / 1000 && close >= both - both / 1000,
+                         "yeti: Embree's Catmull-Rom and Bezier curves agree: %zu hit/miss disagreements, t on %zu of %zu",
+                         disagree, close, both);
         }
         emb_free(curves);
         emb_free(copy);
@@ -382,11 +363,11 @@ static void test_yeti(void)
     scene_free(&c);
     scene_free(&bezier);
 
-    check(scene_yeti(&a, 0, 1) == 0 && a.segment_count == SEGMENTS, "yeti: a tiny target gives one strand");
+    check_report(scene_yeti(&a, 0, 1) == 0 && a.segment_count == SEGMENTS, "yeti: a tiny target gives one strand");
     scene_free(&a);
-    check(scene_yeti(&a, SIZE_MAX, 1) != 0 && a.vertices == NULL && a.indices == NULL &&
-              scene_yeti(&a, (size_t)UINT32_MAX, 1) != 0 && a.vertices == NULL,
-          "yeti: more points than uint32 indices reach is an error, nothing allocated");
+    check_report(scene_yeti(&a, SIZE_MAX, 1) != 0 && a.vertices == NULL && a.indices == NULL &&
+                     scene_yeti(&a, (size_t)UINT32_MAX, 1) != 0 && a.vertices == NULL,
+                 "yeti: more points than uint32 indices reach is an error, nothing allocated");
 }
 
 /* ------------------------------------------------------------------------ */
@@ -401,27 +382,12 @@ static int write_file(const char *path, const unsigned char *data, size_t size)
     return (fclose(file) == 0) && ok;
 }
 
-static void put_u32(unsigned char *p, uint32_t value)
-{
-    p[0] = (unsigned char)value;
-    p[1] = (unsigned char)(value >> 8);
-    p[2] = (unsigned char)(value >> 16);
-    p[3] = (unsigned char)(value >> 24);
-}
-
-static void put_f32(unsigned char *p, float value)
-{
-    uint32_t bits;
-    memcpy(&bits, &value, sizeof bits);
-    put_u32(p, bits);
-}
-
 /* Writes data (optionally modified) to a temporary file and returns what the
    loader says about it. */
 static int load_variant(const unsigned char *data, size_t size)
 {
-    char path[128];
-    snprintf(path, sizeof path, "/tmp/hairobb_test_scenes_%ld.hair", (long)getpid());
+    char path[SCRATCH_PATH_SIZE];
+    scratch_path(path, sizeof path, "hairobb_test_scenes.hair");
     if (!write_file(path, data, size)) {
         printf("     (cannot write %s)\n", path);
         return 99;
@@ -441,32 +407,33 @@ static void test_hair_format(void)
     unsigned char file[128 + 2 * 2 + 5 * 12 + 5 * 4 + 5 * 12];
     memset(file, 0, sizeof file);
     memcpy(file, "HAIR", 4);
-    put_u32(file + 4, strand_count);
-    put_u32(file + 8, point_count);
-    put_u32(file + 12, 1 | 2 | 4 | 16);
-    put_u32(file + 16, 7);      /* default segments, unused: the array wins */
-    put_f32(file + 20, 1.0f);   /* default thickness, unused: the array wins */
+    scene_put_le_u32(file + 4, strand_count);
+    scene_put_le_u32(file + 8, point_count);
+    scene_put_le_u32(file + 12, 1 | 2 | 4 | 16);
+    scene_put_le_u32(file + 16, 7);      /* default segments, unused: the array wins */
+    scene_put_le_f32(file + 20, 1.0f);   /* default thickness, unused: the array wins */
     file[128] = 2;              /* segments per strand, uint16 */
     file[130] = 1;
     for (uint32_t i = 0; i < point_count; i++) {
-        put_f32(file + 132 + 12 * i, (float)i);
-        put_f32(file + 132 + 12 * i + 4, 1.0f);
-        put_f32(file + 132 + 12 * i + 8, 2.0f);
-        put_f32(file + 132 + 60 + 4 * i, 0.2f);
+        scene_put_le_f32(file + 132 + 12 * i, (float)i);
+        scene_put_le_f32(file + 132 + 12 * i + 4, 1.0f);
+        scene_put_le_f32(file + 132 + 12 * i + 8, 2.0f);
+        scene_put_le_f32(file + 132 + 60 + 4 * i, 0.2f);
     }
-    char path[128];
-    snprintf(path, sizeof path, "/tmp/hairobb_test_scenes_%ld_small.hair", (long)getpid());
+    char path[SCRATCH_PATH_SIZE];
+    scratch_path(path, sizeof path, "hairobb_test_scenes_small.hair");
     hair_scene s;
     int result = write_file(path, file, sizeof file) ? scene_load_hair(&s, path) : 99;
     remove(path);
-    check(result == 0 && s.segment_count == 3 && s.vertices[3] == 0.1f && s.vertices[0] == 0.0f &&
-              s.vertices[12] == 1.0f && s.vertices[32] == 3.0f && s.vertices[44] == 4.0f,
-          "hair: segments + thickness + colour arrays (2 strands, 5 points -> 3 segments, radius 0.1)");
+    check_report(result == 0 && s.segment_count == 3 && s.vertices[3] == 0.1f && s.vertices[0] == 0.0f &&
+                     s.vertices[12] == 1.0f && s.vertices[32] == 3.0f && s.vertices[44] == 4.0f,
+                 "hair: segments + thickness + colour arrays (2 strands, 5 points -> 3 segments, radius 0.1)");
     if (result == 0)
-        check(strncmp(s.name, "hairobb_test_scenes_", 20) == 0 && strchr(s.name, '.') == NULL, "hair: scene named after the file (%s)", s.name);
+        check_report(strncmp(s.name, "hairobb_test_scenes_", 20) == 0 && strchr(s.name, '.') == NULL, "hair: scene named after the file (%s)", s.name);
     scene_free(&s);
 
-    check(scene_load_hair(&s, "/tmp/hairobb_no_such_file.hair") == -1, "hair: missing file reports -1 (absent)");
+    check_report(scene_load_hair(&s, scratch_path(path, sizeof path, "no_such_file.hair")) == -1,
+                 "hair: missing file reports -1 (absent)");
 }
 
 static void test_straight_hair(const char *path)
@@ -477,20 +444,20 @@ static void test_straight_hair(const char *path)
     double start = scene_now();
     int result = scene_load_hair(&s, path);
     double seconds = scene_now() - start;
-    check(result == 0 && s.segment_count == 150000, "straight.hair: loads with 150000 segments (got %zu)",
-          s.segment_count);
+    check_report(result == 0 && s.segment_count == 150000, "straight.hair: loads with 150000 segments (got %zu)",
+                 s.segment_count);
     if (result != 0)
         return;
     float min_radius, max_radius;
-    check(scene_is_sane(&s, &min_radius, &max_radius) && min_radius == 0.05f && max_radius == 0.05f,
-          "straight.hair: radius 0.05 everywhere (default thickness 0.1 is a diameter)");
+    check_report(scene_is_sane(&s, &min_radius, &max_radius) && min_radius == 0.05f && max_radius == 0.05f,
+                 "straight.hair: radius 0.05 everywhere (default thickness 0.1 is a diameter)");
     /* README bounds of the points; control points overshoot slightly and
        add the radius */
     const float lower[3] = {-32.5f, -33.9f, -22.7f}, upper[3] = {30.9f, 24.1f, 63.7f};
     int bounds_ok = 1;
     for (int axis = 0; axis < 3; axis++)
         bounds_ok &= fabsf(s.lower[axis] - lower[axis]) < 0.6f && fabsf(s.upper[axis] - upper[axis]) < 0.6f;
-    check(bounds_ok, "straight.hair: bounds ~x[-32.5,30.9] y[-33.9,24.1] z[-22.7,63.7]");
+    check_report(bounds_ok, "straight.hair: bounds ~x[-32.5,30.9] y[-33.9,24.1] z[-22.7,63.7]");
     print_bounds(&s);
     info("straight.hair: loaded in %.3f s", seconds);
     scene_free(&s);
@@ -498,33 +465,33 @@ static void test_straight_hair(const char *path)
     unsigned char *data = NULL;
     size_t size = 0;
     if (scene_read_file(path, &data, &size) != 0) {
-        check(0, "straight.hair: read for corruption tests");
+        check_report(0, "straight.hair: read for corruption tests");
         return;
     }
-    check(load_variant(data, size) == 0, "straight.hair: an unchanged copy in /tmp loads");
+    check_report(load_variant(data, size) == 0, "straight.hair: an unchanged copy (a scratch file) loads");
     const size_t cuts[] = {0, 3, 64, 127, 128, 128 + 12 * 80000, 128 + 12 * 160000, size - 12, size - 1};
     for (size_t k = 0; k < sizeof cuts / sizeof cuts[0]; k++)
-        check(load_variant(data, cuts[k]) > 0, "straight.hair: truncated to %zu bytes is rejected", cuts[k]);
+        check_report(load_variant(data, cuts[k]) > 0, "straight.hair: truncated to %zu bytes is rejected", cuts[k]);
 
     unsigned char *copy = (unsigned char *)malloc(size + 4);
     memcpy(copy, data, size);
     copy[3] = 'X';
-    check(load_variant(copy, size) > 0, "straight.hair: bad magic \"HAIX\" is rejected");
+    check_report(load_variant(copy, size) > 0, "straight.hair: bad magic \"HAIX\" is rejected");
     memcpy(copy, data, size);
-    put_u32(copy + 12, scene_le_u32(data + 12) | 64);
-    check(load_variant(copy, size) > 0, "straight.hair: reserved flag bit 64 is rejected");
+    scene_put_le_u32(copy + 12, scene_le_u32(data + 12) | 64);
+    check_report(load_variant(copy, size) > 0, "straight.hair: reserved flag bit 64 is rejected");
     memcpy(copy, data, size);
-    put_u32(copy + 12, scene_le_u32(data + 12) & ~2u);
-    check(load_variant(copy, size) > 0, "straight.hair: missing points array is rejected");
+    scene_put_le_u32(copy + 12, scene_le_u32(data + 12) & ~2u);
+    check_report(load_variant(copy, size) > 0, "straight.hair: missing points array is rejected");
     memcpy(copy, data, size);
-    put_u32(copy + 4, 9999);
-    check(load_variant(copy, size) > 0, "straight.hair: strand count inconsistent with point count is rejected");
+    scene_put_le_u32(copy + 4, 9999);
+    check_report(load_variant(copy, size) > 0, "straight.hair: strand count inconsistent with point count is rejected");
     memcpy(copy, data, size);
-    put_u32(copy + 16, 14);
-    check(load_variant(copy, size) > 0, "straight.hair: default segments inconsistent with point count is rejected");
+    scene_put_le_u32(copy + 16, 14);
+    check_report(load_variant(copy, size) > 0, "straight.hair: default segments inconsistent with point count is rejected");
     memcpy(copy, data, size);
     memset(copy + size, 0, 4);
-    check(load_variant(copy, size + 4) > 0, "straight.hair: trailing bytes are rejected");
+    check_report(load_variant(copy, size + 4) > 0, "straight.hair: trailing bytes are rejected");
     free(copy);
     free(data);
 }
@@ -537,8 +504,8 @@ static void test_furball(const char *path)
     double start = scene_now();
     int result = scene_load_furball(&s, path);
     double seconds = scene_now() - start;
-    check(result == 0 && s.segment_count == 455505, "furBall_A: loads with 455505 segments (got %zu)",
-          s.segment_count);
+    check_report(result == 0 && s.segment_count == 455505, "furBall_A: loads with 455505 segments (got %zu)",
+                 s.segment_count);
     if (result != 0)
         return;
     /* the file's radii are 0.0009375..0.005; the segment end points carry them */
@@ -550,13 +517,14 @@ static void test_furball(const char *path)
             max_end = fmaxf(max_end, r);
         }
     }
-    check(scene_is_sane(&s, &min_radius, &max_radius) && min_end > 0.0009f && max_end <= 0.005f,
-          "furBall_A: end-point radii %.5f..%.5f within the file's 0.0009..0.005", min_end, max_end);
+    check_report(scene_is_sane(&s, &min_radius, &max_radius) && min_end > 0.0009f && max_end <= 0.005f,
+                 "furBall_A: end-point radii %.5f..%.5f within the file's 0.0009..0.005", min_end, max_end);
     print_bounds(&s);
     info("furBall_A: loaded (gunzip via popen) in %.3f s", seconds);
     scene_free(&s);
-    check(scene_load_furball(&s, "/tmp/hairobb_no_such_furball.bin.gz") == -1,
-          "furBall_A: missing file reports -1 (absent)");
+    char missing[SCRATCH_PATH_SIZE];
+    check_report(scene_load_furball(&s, scratch_path(missing, sizeof missing, "no_such_furball.bin.gz")) == -1,
+                 "furBall_A: missing file reports -1 (absent)");
 }
 
 /* ------------------------------------------------------------------------ */
@@ -612,7 +580,7 @@ static void test_camera(void)
 {
     hair_scene s;
     if (scene_combed(&s, 1000, 1) != 0) {
-        check(0, "camera: scene");
+        check_report(0, "camera: scene");
         return;
     }
     const int width = 64, height = 48;
@@ -622,11 +590,11 @@ static void test_camera(void)
     int unit = 1;
     for (int i = 0; i < width * height; i++)
         unit &= fabsf(sqrtf(dir[3 * i] * dir[3 * i] + dir[3 * i + 1] * dir[3 * i + 1] + dir[3 * i + 2] * dir[3 * i + 2]) - 1.0f) < 1e-5f;
-    check(unit, "camera: unit directions");
+    check_report(unit, "camera: unit directions");
     int top_left = 0, top_right = width - 1, bottom_left = (height - 1) * width;
-    check(dir[3 * top_left + 1] > dir[3 * bottom_left + 1] && dir[3 * top_left] < dir[3 * top_right] &&
-              dir[3 * top_left + 2] < 0.0f && org[2] > s.upper[2] && org[1] > 0.5f * (s.lower[1] + s.upper[1]),
-          "camera: row-major from the top-left, looking from +z and above");
+    check_report(dir[3 * top_left + 1] > dir[3 * bottom_left + 1] && dir[3 * top_left] < dir[3 * top_right] &&
+                     dir[3 * top_left + 2] < 0.0f && org[2] > s.upper[2] && org[1] > 0.5f * (s.lower[1] + s.upper[1]),
+                 "camera: row-major from the top-left, looking from +z and above");
     free(org);
     free(dir);
     scene_free(&s);
@@ -641,18 +609,18 @@ static void test_embree_scene(hair_scene *s, int check_transform)
         double build_seconds = 0.0;
         emb_scene *e = emb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, type, 0, 0, &memory,
                                  &build_seconds);
-        check(e != NULL, "embree %s %s: builds", s->name, type_name);
+        check_report(e != NULL, "embree %s %s: builds", s->name, type_name);
         if (!e)
             continue;
         info("embree %s %s: %zu segments, build %.3f s, %.1f MB (%.0f bytes/segment)", s->name, type_name,
              s->segment_count, build_seconds, (double)memory / 1e6, (double)memory / (double)s->segment_count);
         trace_stats stats = trace_camera(e, s, width, height);
-        check(stats.hit_fraction > 0.05, "embree %s %s: %.1f%% of %dx%d camera rays hit", s->name, type_name,
-              100.0 * stats.hit_fraction, width, height);
-        check(stats.bad_hits == 0, "embree %s %s: hits have t > 0, valid primID, u in [0,1] (%zu bad)", s->name,
-              type_name, stats.bad_hits);
-        check(stats.disagreements == 0, "embree %s %s: emb_occluded agrees with emb_intersect (%zu disagree)",
-              s->name, type_name, stats.disagreements);
+        check_report(stats.hit_fraction > 0.05, "embree %s %s: %.1f%% of %dx%d camera rays hit", s->name, type_name,
+                     100.0 * stats.hit_fraction, width, height);
+        check_report(stats.bad_hits == 0, "embree %s %s: hits have t > 0, valid primID, u in [0,1] (%zu bad)", s->name,
+                     type_name, stats.bad_hits);
+        check_report(stats.disagreements == 0, "embree %s %s: emb_occluded agrees with emb_intersect (%zu disagree)",
+                     s->name, type_name, stats.disagreements);
         info("embree %s %s: %.2f Mrays/s closest hit, 1 thread", s->name, type_name,
              (double)width * height / stats.seconds / 1e6);
 
@@ -675,17 +643,17 @@ static void test_embree_scene(hair_scene *s, int check_transform)
                 bounds_ok &= fabsf(moved.lower[axis] - expected_lower) < 1e-3f &&
                              fabsf(moved.upper[axis] - expected_upper) < 1e-3f;
             }
-            check(bounds_ok, "transform %s: bounds scaled by 10 about the centre and moved", s->name);
+            check_report(bounds_ok, "transform %s: bounds scaled by 10 about the centre and moved", s->name);
             emb_scene *moved_e = emb_build(moved.vertices, moved.vertex_count, moved.indices, moved.segment_count,
                                            type, 0, 0, NULL, NULL);
             if (moved_e) {
                 trace_stats moved_stats = trace_camera(moved_e, &moved, width, height);
-                check(fabs(moved_stats.hit_fraction - stats.hit_fraction) < 0.01,
-                      "transform %s: same camera picture after moving and scaling (%.2f%% vs %.2f%% hit)",
-                      s->name, 100.0 * moved_stats.hit_fraction, 100.0 * stats.hit_fraction);
+                check_report(fabs(moved_stats.hit_fraction - stats.hit_fraction) < 0.01,
+                             "transform %s: same camera picture after moving and scaling (%.2f%% vs %.2f%% hit)",
+                             s->name, 100.0 * moved_stats.hit_fraction, 100.0 * stats.hit_fraction);
                 emb_free(moved_e);
             } else {
-                check(0, "transform %s: embree build", s->name);
+                check_report(0, "transform %s: embree build", s->name);
             }
             free(moved.vertices);
         }
@@ -697,19 +665,19 @@ static void test_embree_options(void)
 {
     hair_scene s;
     if (scene_combed(&s, 10000, 3) != 0) {
-        check(0, "embree options: scene");
+        check_report(0, "embree options: scene");
         return;
     }
     double seconds = 0.0;
     size_t memory = 0;
     emb_scene *e = emb_build(s.vertices, s.vertex_count, s.indices, s.segment_count, EMB_FLAT_BEZIER, 8, 1,
                              &memory, &seconds);
-    check(e != NULL && memory > 0 && seconds > 0.0,
-          "embree options: threads=1 and tessellation rate 8 build (%.1f MB, %.4f s)", (double)memory / 1e6, seconds);
+    check_report(e != NULL && memory > 0 && seconds > 0.0,
+                 "embree options: threads=1 and tessellation rate 8 build (%.1f MB, %.4f s)", (double)memory / 1e6, seconds);
     emb_free(e);
     printf("     (an error message about curve type 7 is expected next)\n");
     e = emb_build(s.vertices, s.vertex_count, s.indices, s.segment_count, 7, 0, 0, &memory, &seconds);
-    check(e == NULL, "embree options: unknown curve type gives NULL");
+    check_report(e == NULL, "embree options: unknown curve type gives NULL");
     emb_free(e);
     scene_free(&s);
 }

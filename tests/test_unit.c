@@ -9,66 +9,11 @@
 #include <string.h>
 #include <stdio.h>
 #include <time.h>
-#include <pthread.h>
 
-/* Counting allocator that can be told to fail the N-th allocation. It
-   fills what it hands out with garbage (so reading memory the library did
-   not write shows), and checks every free against the blocks it handed out
-   (a free of anything else is counted, not done). It counts the bytes live
-   and their peak. The build may allocate and free on several threads: one
-   lock guards every allocator. */
-#define TEST_MAX_LIVE 1024
-typedef struct test_allocator {
-    long calls, fail_at, live;
-    long bad_frees;
-    int failed;                       /* the fail_at-th call came */
-    void *blocks[TEST_MAX_LIVE];
-    size_t sizes[TEST_MAX_LIVE];
-    size_t bytes, peak_bytes;
-} test_allocator;
-static pthread_mutex_t test_allocator_lock = PTHREAD_MUTEX_INITIALIZER;
-static void *test_malloc(size_t size, void *user)
-{
-    test_allocator *a = (test_allocator *)user;
-    void *p = NULL;
-    int i;
-    if (!a) return malloc(size);
-    pthread_mutex_lock(&test_allocator_lock);
-    if (a->calls++ == a->fail_at) {
-        a->failed = 1;
-    } else if ((p = malloc(size)) != NULL) {
-        memset(p, 0xa5, size);
-        for (i = 0; i < TEST_MAX_LIVE && a->blocks[i]; ++i) {}
-        if (i == TEST_MAX_LIVE) { printf("test allocator: too many live blocks\n"); exit(1); }
-        a->blocks[i] = p;
-        a->sizes[i] = size;
-        a->live++;
-        a->bytes += size;
-        if (a->bytes > a->peak_bytes) a->peak_bytes = a->bytes;
-    }
-    pthread_mutex_unlock(&test_allocator_lock);
-    return p;
-}
-static void test_free(void *p, void *user)
-{
-    test_allocator *a = (test_allocator *)user;
-    int i;
-    if (!p) return;
-    if (!a) { free(p); return; }
-    pthread_mutex_lock(&test_allocator_lock);
-    for (i = 0; i < TEST_MAX_LIVE && a->blocks[i] != p; ++i) {}
-    if (i == TEST_MAX_LIVE) {
-        a->bad_frees++;
-    } else {
-        a->blocks[i] = NULL;
-        a->live--;
-        a->bytes -= a->sizes[i];
-        free(p);
-    }
-    pthread_mutex_unlock(&test_allocator_lock);
-}
-#define HAIROBB_MALLOC(size, user) test_malloc(size, user)
-#define HAIROBB_FREE(ptr, user) test_free(ptr, user)
+/* the tests' allocator: it fails the N-th call, fills what it hands out
+   with garbage and checks every free (builds allocate on several threads:
+   it locks) */
+#include "test_alloc.h"
 #define HAIROBB_IMPLEMENTATION
 #include "../hairobb.h"
 #include "check.h"
@@ -1137,8 +1082,7 @@ static void test_allocation_failure(void)
         hairobb_bvh *bvh;
         hairobb_stats stats;
         cancel_log log;
-        memset(&counter, 0, sizeof counter);
-        counter.fail_at = -1;
+        test_allocator_init(&counter, -1);
         memset(&opt, 0, sizeof opt);
         opt.obb_layout = configs[c].layout;
         opt.spatial_splits = configs[c].spatial;
@@ -1162,8 +1106,7 @@ static void test_allocation_failure(void)
         for (fail_at = 0; fail_at < allocations; ++fail_at) {
             test_allocator a;
             hairobb_result r;
-            memset(&a, 0, sizeof a);
-            a.fail_at = fail_at;
+            test_allocator_init(&a, fail_at);
             opt.allocator_user = &a;
             bvh = (hairobb_bvh *)&a;
             r = hairobb_build(v, 4 * n, ix, n, &opt, &bvh);
@@ -1182,8 +1125,7 @@ static void test_allocation_failure(void)
         for (when = -1; when < 3; ++when) {
             test_allocator a;
             hairobb_result r;
-            memset(&a, 0, sizeof a);
-            a.fail_at = -1;
+            test_allocator_init(&a, -1);
             cancel_log_init(&log, when);
             opt.allocator_user = &a;
             bvh = (hairobb_bvh *)&a;
@@ -1208,8 +1150,7 @@ static void test_allocation_failure(void)
             test_allocator f;
             hairobb_result r;
             int cancelled;
-            memset(&f, 0, sizeof f);
-            f.fail_at = fail_at;
+            test_allocator_init(&f, fail_at);
             cancel_log_init(&log, 1);
             opt.allocator_user = &f;
             bvh = (hairobb_bvh *)&f;
@@ -1232,8 +1173,7 @@ static void test_allocation_failure(void)
         hairobb_build_options opt;
         hairobb_bvh *bvh = (hairobb_bvh *)&a;
         hairobb_result r;
-        memset(&a, 0, sizeof a);
-        a.fail_at = -1;
+        test_allocator_init(&a, -1);
         memset(&opt, 0, sizeof opt);
         opt.allocator_user = &a;
         opt.parallel_for = for_backwards;
@@ -1270,8 +1210,7 @@ static void test_build_memory(void)
         hairobb_build_options opt;
         hairobb_bvh *bvh = NULL;
         hairobb_result r;
-        memset(&a, 0, sizeof a);
-        a.fail_at = -1;
+        test_allocator_init(&a, -1);
         memset(&opt, 0, sizeof opt);
         opt.allocator_user = &a;
         opt.spatial_splits = configs[c].spatial;

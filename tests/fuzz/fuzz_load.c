@@ -11,7 +11,7 @@
    its header) is loaded over the scene moving (swept about its roots for
    an even number of steps, translated for an odd), traced at times in
    [0, 1] and at times outside it and NaN, where every ray must miss.
-   Seeds, tests/fuzz_corpus/bvh_load: the scene's BVH saved with several
+   Seeds, tests/fuzz/corpus/bvh_load: the scene's BVH saved with several
    option sets, static and moving, written by this file built with
    -DFUZZ_LOAD_WRITE_SEEDS (its main writes them into the directory named). */
 #define _POSIX_C_SOURCE 200809L
@@ -20,9 +20,9 @@
 #include <string.h>
 #include <math.h>
 #define HAIROBB_IMPLEMENTATION
-#include "../hairobb.h"
+#include "../../hairobb.h"
 #include "fuzz_checks.h"
-#include "scenes.h"
+#include "../scenes.h"
 
 #define FUZZ_MAX_STEPS 5
 
@@ -53,28 +53,14 @@ static void fuzz_setup(void)
    one time. */
 static void trace_at(const hairobb_bvh *bvh, float time)
 {
-    static const float directions[4][3] = {{0, 0, 1}, {1, 0, 0}, {0.6f, -0.8f, 0}, {0.3f, 0.4f, -0.866f}};
-    float lower[3], upper[3];
     size_t s;
-    int d, j;
-    hairobb_bounds(bvh, lower, upper);
-    for (d = 0; d < 4; ++d) {
-        hairobb_ray ray;
-        for (j = 0; j < 3; ++j) {
-            float middle = 0.5f * lower[j] + 0.5f * upper[j], extent = upper[j] - lower[j];
-            ray.dir[j] = directions[d][j];
-            ray.org[j] = middle - directions[d][j] * (extent + 1.0f);
-        }
-        ray.tnear = 0.0f;
-        ray.tfar = INFINITY;
-        ray.time = time;
-        fuzz_check_ray(bvh, &ray, fuzz_scene.segment_count);
-    }
+    int j;
+    fuzz_check_rays_through_bounds(bvh, fuzz_scene.segment_count, time);
     for (s = 0; s < fuzz_scene.segment_count; s += 6) {
         const float *cp = fuzz_scene.vertices + 4 * (size_t)fuzz_scene.indices[s];
         hairobb_ray ray;
         for (j = 0; j < 3; ++j) {
-            ray.dir[j] = directions[s % 4][j];
+            ray.dir[j] = fuzz_directions[s % 4][j];
             ray.org[j] = 0.5f * cp[4 + j] + 0.5f * cp[8 + j] - ray.dir[j];
         }
         ray.tnear = 0.0f;

@@ -4,13 +4,13 @@
    lengths adding up to the point count, every segment's control points
    inside the vertex array, finite coordinates and non-negative radii. A
    BVH built from them must trace sane hits (fuzz_checks.h). Seeds: small
-   valid files of every array combination, tests/fuzz_corpus/hair_read. */
+   valid files of every array combination, tests/fuzz/corpus/hair_read. */
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <math.h>
 #define HAIROBB_IMPLEMENTATION
-#include "../hairobb.h"
+#include "../../hairobb.h"
 #include "fuzz_checks.h"
 
 static void check_arrays(const hairobb_hair *h)
@@ -27,26 +27,6 @@ static void check_arrays(const hairobb_hair *h)
     for (i = 0; i < 4 * h->vertex_count; ++i) {
         if (!isfinite(h->vertices[i])) fuzz_fail("a vertex that is not finite");
         if (i % 4 == 3 && h->vertices[i] < 0.0f) fuzz_fail("a negative radius");
-    }
-}
-
-/* A few rays through the middle of the bounds from fixed directions. */
-static void trace(const hairobb_bvh *bvh, size_t segments)
-{
-    static const float directions[4][3] = {{0, 0, 1}, {1, 0, 0}, {0.6f, -0.8f, 0}, {0.3f, 0.4f, -0.866f}};
-    float lower[3], upper[3];
-    int d, j;
-    hairobb_bounds(bvh, lower, upper);
-    for (d = 0; d < 4; ++d) {
-        hairobb_ray ray;
-        for (j = 0; j < 3; ++j) {
-            float middle = 0.5f * lower[j] + 0.5f * upper[j], extent = upper[j] - lower[j];
-            ray.dir[j] = directions[d][j];
-            ray.org[j] = middle - directions[d][j] * (extent + 1.0f);
-        }
-        ray.tnear = 0.0f;
-        ray.tfar = INFINITY;
-        fuzz_check_ray(bvh, &ray, segments);
     }
 }
 
@@ -72,7 +52,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         /* Catmull-Rom control points may overshoot a coordinate near the limit */
         if (result != HAIROBB_OK && result != HAIROBB_ERROR_INVALID_GEOMETRY) fuzz_fail("a read file that does not build");
         if (bvh) {
-            trace(bvh, hair.segment_count);
+            fuzz_check_rays_through_bounds(bvh, hair.segment_count, 0.0f);
             hairobb_free(bvh);
         }
     }

@@ -17,14 +17,14 @@
    poisoned step (INVALID_GEOMETRY, the rays then traced to the same bits
    as before), or the steps in reverse order. Build with clang
    -fsanitize=fuzzer,address,undefined (see `make fuzz`); leaks are
-   LeakSanitizer's to find. Seeds: tests/fuzz_corpus/bvh_build (the
+   LeakSanitizer's to find. Seeds: tests/fuzz/corpus/bvh_build (the
    motion ones written by this file built with -DFUZZ_BUILD_WRITE_SEEDS). */
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <math.h>
 #define HAIROBB_IMPLEMENTATION
-#include "../hairobb.h"
+#include "../../hairobb.h"
 #include "fuzz_checks.h"
 
 typedef struct reader {
