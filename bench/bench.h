@@ -123,10 +123,11 @@ typedef struct variant {
        curve, not the reference's: for memory and speed), with or without the copy */
     hairobb_basis basis;
     hairobb_switch bezier_copy;
+    unsigned embree_flags; /* Embree: RTC_SCENE_FLAG_* (compact, robust); 0 = none */
 } variant;
 
 /* the rows of all_variants (variants.c checks the count); result arrays are this long */
-enum { VARIANT_COUNT = 25 };
+enum { VARIANT_COUNT = 27 };
 extern const variant all_variants[];
 
 /* The baseline of every ratio */

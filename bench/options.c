@@ -37,10 +37,14 @@ static void print_help(void)
            "                        catmull-rom, catmull-rom-copy (Catmull-Rom basis, without and with the Bezier\n"
            "                        copy: on Bezier scenes other curves through the same points),\n"
            "                        b-spline, b-spline-copy (the same for the uniform B-spline basis)\n"
-           "                      Embree: embree-r4, embree-r8, embree-r16 (flat), embree-round\n"
+           "                      Embree: embree-r4 (flat, rate 4: Embree's default, the baseline of every ratio),\n"
+           "                        embree-r8, embree-r16 (flat), embree-round, and the peers\n"
+           "                        embree-compact and embree-cycles (below)\n"
            "                      groups: all, hairobb, embree, precision, ablation, bases,\n"
-           "                        yeti (catmull-rom: hairobb C-R without the Bezier copy, embree-r4, embree-round)\n"
-           "  --rounds N          timing rounds, one pass of every variant each, after a warm-up pass;\n"
+           "                        yeti (catmull-rom: hairobb C-R without the Bezier copy, embree-r4,\n"
+           "                        embree-cycles, embree-round)\n",
+           DEFAULT_SEGMENTS, DEFAULT_RESOLUTION);
+    printf("  --rounds N          timing rounds, one pass of every variant each, after a warm-up pass;\n"
            "                      medians and [min-max] reported (default %d, 1..64; --passes: the same)\n"
            "  --accuracy-rays N   primary rays checked against the reference, 0 = none (default %d)\n"
            "  --memory-mb N       builds and the reference whose estimated memory exceeds 0.9 of what is\n"
@@ -62,9 +66,9 @@ static void print_help(void)
            "  --save-load LIST    only this: combed scenes of these segment counts (e.g. 1M,10M), each\n"
            "                      built (all cores), saved and loaded in memory --rounds times: bytes per\n"
            "                      segment, build, save and load seconds (with the hair check, and without)\n",
-           DEFAULT_SEGMENTS, DEFAULT_RESOLUTION, DEFAULT_ROUNDS, DEFAULT_ACCURACY_RAYS, DEFAULT_TSV_PATH,
+           DEFAULT_ROUNDS, DEFAULT_ACCURACY_RAYS, DEFAULT_TSV_PATH,
            DEFAULT_PNG_PATH, DEFAULT_PLOT_SCRIPT, TEST_DATA_STRAIGHT_HAIR_DEFAULT, SCENE_FURBALL_DEFAULT_PATH);
-    /* two strings: C99 compilers need support only 4095 characters in one */
+    /* several strings: C99 compilers need support only 4095 characters in one */
     printf("  --builds            only build time: for each --scene, --rounds rounds of hairobb's defaults on all\n"
            "                      cores, on 1 thread, and Embree flat r4 on all cores (Catmull-Rom scenes: both\n"
            "                      read the Catmull-Rom curves), each freed before the next; medians [min-max] of\n"
@@ -76,6 +80,12 @@ static void print_help(void)
            "                      times (--res, --rounds, --threads), accuracy at 8 times (--accuracy-rays),\n"
            "                      TSV (--tsv, one row a motion and library)\n"
            "  --help              this text\n");
+    printf("Embree's peers (in the groups all and embree; ratios stay against embree-r4):\n"
+           "  embree-compact      flat r4 with RTC_SCENE_FLAG_COMPACT: Embree's compact mode, the peer in memory of\n"
+           "                      hairobb (about 40 bytes a segment), and of a compact hairobb mode to come\n"
+           "  embree-cycles       Cycles' set-up: flat curves, RTC_SCENE_FLAG_ROBUST, tessellation rate 5; flat\n"
+           "                      Catmull-Rom curves on a Catmull-Rom scene (yeti), as Cycles hands Embree its\n"
+           "                      hair; on a Bezier scene, flat Bezier curves with the same flags and rate\n");
 }
 
 /* Parses a count with an optional k or M suffix; 0 on success. */
