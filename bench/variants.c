@@ -79,6 +79,8 @@ static const struct { const char *name, *members; } variant_groups[] = {
     /* a Catmull-Rom scene (yeti) without --variants: hairobb without the copy, Embree on the same buffers
        (embree-cycles: Cycles' own curves there, flat Catmull-Rom) */
     {"yeti", "catmull-rom,embree-r4,embree-cycles,embree-round"},
+    /* --scene scale without --variants: the defaults against Embree's default and its compact mode */
+    {"scale", "default,embree-r4,embree-compact"},
 };
 
 int variant_index(const char *key)
