@@ -81,8 +81,7 @@ static void print_help(void)
            "                      hairobb's defaults and Embree flat r4 (rtcSetGeometryTimeStepCount) on the same\n"
            "                      arrays: build s, bytes/segment, primary and incoherent Mrays/s at random ray\n"
            "                      times (--res, --rounds, --threads), accuracy at 8 times (--accuracy-rays),\n"
-           "                      TSV (--tsv, one row a motion and library)\n"
-           "  --help              this text\n");
+           "                      TSV (--tsv, one row a motion and library)\n");
     printf("  --strand-order O    the order of the strands in the scene's arrays: groom (shuffled whole with a\n"
            "                      fixed seed, as a groom generator writes them and a renderer hands them over; the\n"
            "                      default for procedural scenes), space (sorted by the Morton code of their roots),\n"
@@ -92,6 +91,7 @@ static void print_help(void)
            "                      MADV_HUGEPAGE (Linux only), not in plain malloc memory (the default); the scene's\n"
            "                      header says which, and how much of them lies on huge pages\n"
            "                      (both: every mode, --builds, --motion, --animate and --save-load included)\n"
+           "  --help              this text\n"
            "Embree's peers (in the groups all and embree; ratios stay against embree-r4):\n"
            "  embree-compact      flat r4 with RTC_SCENE_FLAG_COMPACT: Embree's compact mode, the peer in memory of\n"
            "                      hairobb (about 40 bytes a segment), and of a compact hairobb mode to come\n"
