@@ -157,7 +157,7 @@ BENCH_FLAGS_bench         = -DBENCH_CFLAGS='"$(BASE) $(ARCH)"'
 BENCH_FLAGS_bench_counted = -DBENCH_COUNTS
 BENCH_FLAGS_bench_profile = -fno-pie -no-pie
 # (its parts: bench/bench.h; hairobb's implementation is in bench/harness.c)
-BENCH_SOURCES = bench/bench.c bench/options.c bench/variants.c bench/memory.c bench/scenes.c bench/harness.c \
+BENCH_SOURCES = bench/bench.c bench/options.c bench/variants.c bench/memory.c bench/scenes.c bench/layout.c bench/harness.c \
                 bench/accuracy.c bench/report.c bench/tsv_chart.c bench/mode_scenes.c bench/mode_builds.c \
                 bench/mode_motion.c bench/mode_animate.c bench/mode_save_load.c
 $(B)/bench $(B)/bench_counted $(B)/bench_profile: $(BENCH_SOURCES) bench/bench.h bench/alloc_meter.h hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps

@@ -7,6 +7,7 @@
      variants.c        the variants (hairobb options, Embree curves), their groups, building one
      memory.c          the memory a build would take, and what each step took
      scenes.c          scenes and their ray sets (primary, incoherent, shadow)
+     layout.c          the scene's arrays: the strands' order, plain or huge-page memory
      harness.c         hairobb's implementation, the tracers, the parallel loop, timing in rounds
      accuracy.c        the reference's answers, and a tracer's errors against them
      report.c          progress lines, the machine, the tables
@@ -72,10 +73,24 @@ enum {
 typedef enum ray_kind { RAYS_PRIMARY, RAYS_INCOHERENT, RAYS_SHADOW, RAY_KIND_COUNT } ray_kind;
 extern const char *const ray_kind_names[RAY_KIND_COUNT];
 
+/* --strand-order: the order of the strands in the scene's arrays (layout.c) */
+typedef enum strand_order {
+    STRAND_ORDER_GENERATED, /* as tests/scenes.h makes them, or as a file holds them */
+    STRAND_ORDER_GROOM,     /* shuffled with a fixed seed, as a groom generator writes them */
+    STRAND_ORDER_SPACE,     /* sorted by the Morton code of their roots */
+    STRAND_ORDER_COUNT,
+    STRAND_ORDER_UNSET = -1 /* groom for procedural scenes, the file's order for files */
+} strand_order;
+extern const char *const strand_order_names[STRAND_ORDER_COUNT];
+
 typedef struct options {
     const char *scenes[MAX_SCENES];
+    size_t scene_segments[MAX_SCENES]; /* NAME:N in --scene (and --scene scale); 0 = --segments */
+    int scene_scale[MAX_SCENES];       /* from --scene scale: the scale group unless --variants */
     int scene_count;
     size_t segments;
+    int strand_order;               /* --strand-order: STRAND_ORDER_*, or STRAND_ORDER_UNSET */
+    int huge_pages;                 /* --huge-pages: the scene's arrays in memory advised MADV_HUGEPAGE */
     int resolution;
     int ray_kind_enabled[RAY_KIND_COUNT];
     unsigned thread_counts[MAX_THREAD_COUNTS];
@@ -95,6 +110,16 @@ typedef struct options {
     int motion;                     /* --motion: the motion blur study alone */
     int builds;                     /* --builds: the build-time study alone */
 } options;
+
+/* A scene's arrays as the bench handed them over (layout.c) */
+typedef struct scene_layout {
+    strand_order order;        /* the order the strands are in */
+    int from_file;             /* read from a file: STRAND_ORDER_GENERATED is the file's own order */
+    size_t strands;
+    int huge_pages;            /* the arrays are in 2 MB-aligned memory advised MADV_HUGEPAGE */
+    size_t array_bytes;        /* of the vertices and indices */
+    long long huge_page_bytes; /* of those, on huge pages (AnonHugePages, /proc/self/smaps); -1 unknown */
+} scene_layout;
 
 /* ======================================================================== */
 /* Variants                                                                 */
@@ -123,10 +148,11 @@ typedef struct variant {
        curve, not the reference's: for memory and speed), with or without the copy */
     hairobb_basis basis;
     hairobb_switch bezier_copy;
+    unsigned embree_flags; /* Embree: RTC_SCENE_FLAG_* (compact, robust); 0 = none */
 } variant;
 
 /* the rows of all_variants (variants.c checks the count); result arrays are this long */
-enum { VARIANT_COUNT = 25 };
+enum { VARIANT_COUNT = 27 };
 extern const variant all_variants[];
 
 /* The baseline of every ratio */
@@ -238,11 +264,13 @@ typedef struct scene_result {
     variant_result variants[VARIANT_COUNT];
     scene_basis basis;
     int selected[VARIANT_COUNT]; /* the variants run on this scene */
+    scene_layout layout;
 } scene_result;
 
 /* Everything a scene's variants share: the geometry and the rays. */
 typedef struct workload {
     hair_scene scene;
+    scene_layout layout;   /* its strands' order and its arrays' memory */
     ray_set rays[RAY_KIND_COUNT];
     hit_record *hits;      /* output buffer, sized for the largest ray set */
     size_t primary_hits;
@@ -296,8 +324,16 @@ int memory_fits(double bytes, const char *what, char *why, size_t size);
 void rss_step_begin(rss_step *r);
 void rss_step_end(rss_step *r);
 
+/* layout.c */
+int huge_pages_supported(void);
+int arrange_scene(const options *o, hair_scene *s, int from_file, scene_layout *layout);
+const char *layout_order_text(const scene_layout *l);
+const char *layout_memory_text(const scene_layout *l, char *text, size_t size);
+
 /* scenes.c */
-int load_scene(const options *o, const char *name, hair_scene *s, char why[TEST_DATA_WHY_SIZE]);
+size_t scene_segments(const options *o, int index);
+int load_scene(const options *o, const char *name, size_t segments, hair_scene *s, scene_layout *layout,
+               char why[TEST_DATA_WHY_SIZE]);
 int ray_set_alloc(ray_set *r, ray_kind kind, size_t count);
 int ray_set_random_times(ray_set *r, uint64_t seed);
 void ray_set_free(ray_set *r);
@@ -331,6 +367,7 @@ extern int show_progress; /* stderr is a terminal and --quiet was not given */
 void progress(const char *format, ...);
 void progress_start(const char *format, ...);
 void print_machine(const options *o);
+void print_scene_line(const workload *w);
 void print_scene_header(const options *o, const workload *w);
 void print_curves_note(const workload *w);
 void print_build_table(const scene_result *sr, const int selected[VARIANT_COUNT]);

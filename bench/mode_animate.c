@@ -29,8 +29,9 @@ static void sway_pose(const hair_scene *rest, int frame, int frames, float *out)
 int run_animation(const options *o, int frames)
 {
     hair_scene rest;
-    char why[TEST_DATA_WHY_SIZE];
-    if (load_scene(o, "combed", &rest, why) != 0) {
+    scene_layout layout;
+    char why[TEST_DATA_WHY_SIZE], memory[256];
+    if (load_scene(o, "combed", 0, &rest, &layout, why) != 0) {
         fprintf(stderr, "bench: the combed scene could not be made\n");
         return 1;
     }
@@ -58,6 +59,8 @@ int run_animation(const options *o, int frames)
     printf("\n=== animation: combed, %zu segments, %d frames swaying about the roots; refit and build on all cores, "
            "%dx%d primary rays on %u thread%s, %d rounds\n",
            rest.segment_count, frames, o->resolution, o->resolution, trace_threads, trace_threads == 1 ? "" : "s", o->rounds);
+    printf("strands: %zu, %s; arrays: %s (the poses: plain malloc memory)\n", layout.strands,
+           layout_order_text(&layout), layout_memory_text(&layout, memory, sizeof memory));
     printf("frame  refit s    build s    refit/build  Mrays/s refitted  Mrays/s fresh  refitted/fresh  SAH/as built  SAH/fresh\n");
     double ratio_sum = 0.0;
     int failures = 0;

@@ -17,13 +17,16 @@ int run_builds(const options *o)
            "bytes/segment", "transient b/seg");
     for (int c = 0; c < o->scene_count; c++) {
         hair_scene s;
-        char why[TEST_DATA_WHY_SIZE];
-        int loaded = load_scene(o, o->scenes[c], &s, why);
+        scene_layout layout;
+        char why[TEST_DATA_WHY_SIZE], arrays[256];
+        int loaded = load_scene(o, o->scenes[c], scene_segments(o, c), &s, &layout, why);
         if (loaded != 0) {
             printf("%-12s skipped: %s\n", o->scenes[c], loaded < 0 ? why : "could not be loaded");
             failures += loaded > 0;
             continue;
         }
+        printf("%-12s %12zu strands: %zu, %s; arrays: %s\n", o->scenes[c], s.segment_count, layout.strands,
+               layout_order_text(&layout), layout_memory_text(&layout, arrays, sizeof arrays));
         int catmull_rom = s.basis == SCENE_BASIS_CATMULL_ROM;
         double seconds[BUILDS][MAX_ROUNDS], ratios[BUILDS][MAX_ROUNDS];
         size_t memory[BUILDS] = {0, 0, 0}, transient = 0;

@@ -169,14 +169,16 @@ static void motion_time_in_rounds(const options *o, const ray_set *rays, hit_rec
     }
 }
 
-static void motion_print(const options *o, const hair_scene *s, const ray_set rays[RAY_KIND_COUNT],
-                         size_t accuracy_rays, double reference_seconds,
+static void motion_print(const options *o, const hair_scene *s, const scene_layout *layout,
+                         const ray_set rays[RAY_KIND_COUNT], size_t accuracy_rays, double reference_seconds,
                          motion_result results[MOTION_ROWS][MOTION_LIBRARIES])
 {
-    char c[5][48];
+    char c[5][48], memory[256];
     printf("\n=== motion blur: combed, %zu segments; hairobb defaults against Embree flat Bezier r%d "
            "(rtcSetGeometryTimeStepCount), the same buffers, both built on all cores\n",
            s->segment_count, all_variants[variant_index(BASELINE_KEY)].embree_rate);
+    printf("strands: %zu, %s; arrays: %s (the steps: plain memory, in the same order)\n", layout->strands,
+           layout_order_text(layout), layout_memory_text(layout, memory, sizeof memory));
     printf("steps: scene_motion_steps at times k/(T-1); rotate: each strand swept about its root's normal; "
            "translate: along (1, 0.5, 0.25) (root radius 0.004)\n");
     printf("rays: primary %zu (%dx%d pinhole), incoherent %zu (diffuse bounce from the static hairobb's primary hits); "
@@ -288,13 +290,14 @@ int run_motion(const options *o)
     static motion_result results[MOTION_ROWS][MOTION_LIBRARIES];
     float *steps[MOTION_ROWS][MOTION_MAX_STEPS];
     hair_scene s;
+    scene_layout layout;
     char why[TEST_DATA_WHY_SIZE];
     ray_set rays[RAY_KIND_COUNT];
     int failures = 0;
     memset(results, 0, sizeof results);
     memset(steps, 0, sizeof steps);
     memset(rays, 0, sizeof rays);
-    if (load_scene(o, "combed", &s, why) != 0) {
+    if (load_scene(o, "combed", 0, &s, &layout, why) != 0) {
         fprintf(stderr, "bench: the combed scene could not be made\n");
         return 1;
     }
@@ -348,7 +351,7 @@ int run_motion(const options *o)
         progress("done");
     }
     if (!failures) {
-        motion_print(o, &s, rays, accuracy_rays, reference_seconds, results);
+        motion_print(o, &s, &layout, rays, accuracy_rays, reference_seconds, results);
         motion_tsv(o, &s, results);
     }
     for (int row = 0; row < MOTION_ROWS; row++) {

@@ -9,20 +9,26 @@
 int run_save_load(const options *o)
 {
     int failures = 0;
-    printf("\nsave and load against build: combed, default options, all cores, %d rounds\n", o->rounds);
+    printf("\nsave and load against build: combed (strands in %s order, arrays in %s), default options, all cores, "
+           "%d rounds\n",
+           strand_order_names[o->strand_order == STRAND_ORDER_UNSET ? STRAND_ORDER_GROOM : o->strand_order],
+           o->huge_pages ? "memory advised MADV_HUGEPAGE" : "plain malloc memory", o->rounds);
     printf("%12s %10s %20s %20s %20s %20s %10s\n", "segments", "bytes/seg", "build s", "save s", "load s", "load unchecked s",
            "build/load");
     for (int c = 0; c < o->save_load_count; c++) {
         hair_scene s;
+        scene_layout layout;
+        char why[TEST_DATA_WHY_SIZE];
         double build_s[MAX_ROUNDS], save_s[MAX_ROUNDS], load_s[MAX_ROUNDS], unchecked_s[MAX_ROUNDS];
         size_t size = 0;
         int ok = 1;
         progress_start("save/load: combed %zu segments", o->save_load_segments[c]);
-        if (scene_combed(&s, o->save_load_segments[c], 1) != 0) {
+        if (load_scene(o, "combed", o->save_load_segments[c], &s, &layout, why) != 0) {
             progress("out of memory");
             ++failures;
             continue;
         }
+
         for (int r = 0; r < o->rounds && ok; r++) {
             hairobb_bvh *built = NULL, *loaded = NULL, *unchecked = NULL;
             hairobb_build_options skip;

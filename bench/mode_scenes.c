@@ -105,13 +105,19 @@ static int workload_prepare(const options *o, const int selected[VARIANT_COUNT],
 
 /* The variants a scene runs: --variants; without it a Catmull-Rom scene
    runs the yeti group (the Bezier rows there would each hold a 72-byte
-   copy a segment, the rest of "all" reads Bezier points). */
-static void scene_variants(const options *o, const hair_scene *s, const int requested[VARIANT_COUNT], scene_result *sr)
+   copy a segment, the rest of "all" reads Bezier points), and the scenes of
+   --scene scale the scale group (every row's BVH is held at once: at 10M
+   segments "all" would take gigabytes, and minutes a round). */
+static void scene_variants(const options *o, int index, const hair_scene *s, const int requested[VARIANT_COUNT],
+                           scene_result *sr)
 {
     sr->basis = s->basis;
     if (s->basis == SCENE_BASIS_CATMULL_ROM && !o->variants_given) {
         memset(sr->selected, 0, sizeof sr->selected);
         select_variants("yeti", sr->selected);
+    } else if (o->scene_scale[index] && !o->variants_given) {
+        memset(sr->selected, 0, sizeof sr->selected);
+        select_variants("scale", sr->selected);
     } else {
         memcpy(sr->selected, requested, sizeof sr->selected);
     }
@@ -120,6 +126,19 @@ static void scene_variants(const options *o, const hair_scene *s, const int requ
 /* ======================================================================== */
 /* A scene, and all of them                                                 */
 /* ======================================================================== */
+
+/* "combed" of 2,000,000 segments asked as combed:2M becomes "combed-2M" */
+static void scene_name_with_size(hair_scene *s, size_t segments)
+{
+    char base[40];
+    snprintf(base, sizeof base, "%.39s", s->name);
+    if (segments % 1000000 == 0)
+        snprintf(s->name, sizeof s->name, "%s-%zuM", base, segments / 1000000);
+    else if (segments % 1000 == 0)
+        snprintf(s->name, sizeof s->name, "%s-%zuk", base, segments / 1000);
+    else
+        snprintf(s->name, sizeof s->name, "%s-%zu", base, segments);
+}
 
 /* --profile: each variant built in turn and traced once over each ray set,
    on this thread, between callgrind's zeroing and its dump (named after the
@@ -160,10 +179,11 @@ static void profile_scene(const options *o, workload *w, const int selected[VARI
     }
 }
 
-/* Loads, measures and prints one scene. Returns 0, or 1 on an error.
-   requested: --variants (sr->selected: those this scene runs). */
-static int run_scene(const options *o, const char *name, const int requested[VARIANT_COUNT], scene_result *sr)
+/* Loads, measures and prints --scene's index-th scene. Returns 0, or 1 on
+   an error. requested: --variants (sr->selected: those this scene runs). */
+static int run_scene(const options *o, int index, const int requested[VARIANT_COUNT], scene_result *sr)
 {
+    const char *name = o->scenes[index];
     workload w;
     memset(&w, 0, sizeof w);
     memset(sr, 0, sizeof *sr);
@@ -172,7 +192,7 @@ static int run_scene(const options *o, const char *name, const int requested[VAR
     double start = scene_now();
     char why[TEST_DATA_WHY_SIZE];
     rss_step_begin(&w.scene_rss);
-    int loaded = load_scene(o, name, &w.scene, why);
+    int loaded = load_scene(o, name, scene_segments(o, index), &w.scene, &w.layout, why);
     rss_step_end(&w.scene_rss);
     w.scene_seconds = scene_now() - start;
     if (loaded == -1) {
@@ -185,9 +205,13 @@ static int run_scene(const options *o, const char *name, const int requested[VAR
         return 1;
     }
     progress("%s: %zu segments in %.2f s", w.scene.name, w.scene.segment_count, scene_now() - start);
+    /* a scene of its own size (NAME:N, scale) is named by it: combed-2M and combed-10M stay apart in the TSV */
+    if (o->scene_segments[index])
+        scene_name_with_size(&w.scene, o->scene_segments[index]);
     snprintf(sr->name, sizeof sr->name, "%s", w.scene.name);
     sr->segment_count = w.scene.segment_count;
-    scene_variants(o, &w.scene, requested, sr);
+    sr->layout = w.layout;
+    scene_variants(o, index, &w.scene, requested, sr);
     const int *selected = sr->selected;
     if (workload_prepare(o, selected, &w) != 0) {
         workload_free(&w);
@@ -197,6 +221,7 @@ static int run_scene(const options *o, const char *name, const int requested[VAR
     for (int k = 0; k < RAY_KIND_COUNT; k++)
         sr->ray_counts[k] = w.rays[k].count;
     if (o->profile) {
+        print_scene_line(&w);
         profile_scene(o, &w, selected, sr);
         workload_free(&w);
         return 0;
@@ -238,13 +263,13 @@ int run_scenes(const options *o, const int selected[VARIANT_COUNT])
     if (o->profile) {
         int failures = 0;
         for (int s = 0; s < o->scene_count; s++)
-            failures += run_scene(o, o->scenes[s], selected, &results[s]);
+            failures += run_scene(o, s, selected, &results[s]);
         return failures ? 1 : 0;
     }
     FILE *tsv = tsv_open(o);
     int failures = 0;
     for (int s = 0; s < o->scene_count; s++) {
-        failures += run_scene(o, o->scenes[s], selected, &results[s]);
+        failures += run_scene(o, s, selected, &results[s]);
         if (tsv && results[s].loaded)
             tsv_write_scene(tsv, o, &results[s], results[s].selected);
     }

@@ -19,12 +19,15 @@ static void print_help(void)
            "  --scene LIST        scenes, comma list or repeated (default combed):\n"
            "                      combed, curly, random, crossing (procedural), straight (--straight-path),\n"
            "                      furball (Embree's furBall_A, skipped if absent), or a PATH.hair file;\n"
+           "                      NAME:N: a procedural scene of its own size (e.g. combed:2M,curly:500k);\n"
+           "                      scale: combed:2M and combed:10M, run with the scale group unless --variants;\n"
            "                      yeti: Yeti-class fur on a capsule, Catmull-Rom strands of 16 segments\n"
            "                        holding 19 shared points (1.19 a segment), run by default with the yeti\n"
            "                        group (with --variants, every row reads its Catmull-Rom curves); builds\n"
            "                        and the reference that would not fit in MemAvailable are skipped, said so;\n"
            "                        the paper's size: --scene yeti --segments 153M --rays primary,incoherent\n"
-           "  --segments N        segments of procedural scenes (default %d; k and M suffixes allowed)\n"
+           "  --segments N        segments of procedural scenes without a size of their own (default %d; k and M\n"
+           "                      suffixes allowed)\n"
            "  --res N             primary rays: N x N pinhole camera framing the hair (default %d)\n"
            "  --rays LIST         ray sets: primary, incoherent, shadow (default all)\n"
            "  --threads LIST      thread counts, e.g. 1,8 (default 1 and the number of cores)\n"
@@ -37,10 +40,14 @@ static void print_help(void)
            "                        catmull-rom, catmull-rom-copy (Catmull-Rom basis, without and with the Bezier\n"
            "                        copy: on Bezier scenes other curves through the same points),\n"
            "                        b-spline, b-spline-copy (the same for the uniform B-spline basis)\n"
-           "                      Embree: embree-r4, embree-r8, embree-r16 (flat), embree-round\n"
-           "                      groups: all, hairobb, embree, precision, ablation, bases,\n"
-           "                        yeti (catmull-rom: hairobb C-R without the Bezier copy, embree-r4, embree-round)\n"
-           "  --rounds N          timing rounds, one pass of every variant each, after a warm-up pass;\n"
+           "                      Embree: embree-r4 (flat, rate 4: Embree's default, the baseline of every ratio),\n"
+           "                        embree-r8, embree-r16 (flat), embree-round, and the peers\n"
+           "                        embree-compact and embree-cycles (below)\n"
+           "                      groups: all, hairobb, embree, precision, ablation, bases, scale (default, embree-r4,\n"
+           "                        embree-compact), yeti (catmull-rom: hairobb C-R without the Bezier copy,\n"
+           "                        embree-r4, embree-cycles, embree-round)\n",
+           DEFAULT_SEGMENTS, DEFAULT_RESOLUTION);
+    printf("  --rounds N          timing rounds, one pass of every variant each, after a warm-up pass;\n"
            "                      medians and [min-max] reported (default %d, 1..64; --passes: the same)\n"
            "  --accuracy-rays N   primary rays checked against the reference, 0 = none (default %d)\n"
            "  --memory-mb N       builds and the reference whose estimated memory exceeds 0.9 of what is\n"
@@ -62,9 +69,9 @@ static void print_help(void)
            "  --save-load LIST    only this: combed scenes of these segment counts (e.g. 1M,10M), each\n"
            "                      built (all cores), saved and loaded in memory --rounds times: bytes per\n"
            "                      segment, build, save and load seconds (with the hair check, and without)\n",
-           DEFAULT_SEGMENTS, DEFAULT_RESOLUTION, DEFAULT_ROUNDS, DEFAULT_ACCURACY_RAYS, DEFAULT_TSV_PATH,
+           DEFAULT_ROUNDS, DEFAULT_ACCURACY_RAYS, DEFAULT_TSV_PATH,
            DEFAULT_PNG_PATH, DEFAULT_PLOT_SCRIPT, TEST_DATA_STRAIGHT_HAIR_DEFAULT, SCENE_FURBALL_DEFAULT_PATH);
-    /* two strings: C99 compilers need support only 4095 characters in one */
+    /* several strings: C99 compilers need support only 4095 characters in one */
     printf("  --builds            only build time: for each --scene, --rounds rounds of hairobb's defaults on all\n"
            "                      cores, on 1 thread, and Embree flat r4 on all cores (Catmull-Rom scenes: both\n"
            "                      read the Catmull-Rom curves), each freed before the next; medians [min-max] of\n"
@@ -74,8 +81,23 @@ static void print_help(void)
            "                      hairobb's defaults and Embree flat r4 (rtcSetGeometryTimeStepCount) on the same\n"
            "                      arrays: build s, bytes/segment, primary and incoherent Mrays/s at random ray\n"
            "                      times (--res, --rounds, --threads), accuracy at 8 times (--accuracy-rays),\n"
-           "                      TSV (--tsv, one row a motion and library)\n"
-           "  --help              this text\n");
+           "                      TSV (--tsv, one row a motion and library)\n");
+    printf("  --strand-order O    the order of the strands in the scene's arrays: groom (shuffled whole with a\n"
+           "                      fixed seed, as a groom generator writes them and a renderer hands them over; the\n"
+           "                      default for procedural scenes), space (sorted by the Morton code of their roots),\n"
+           "                      generated (as tests/scenes.h makes them, partly in space; files keep their own\n"
+           "                      order unless this is given). Segment numbers change; the hair and the rays do not\n"
+           "  --huge-pages        the scene's vertex and index arrays in 2 MB-aligned memory advised\n"
+           "                      MADV_HUGEPAGE (Linux only), not in plain malloc memory (the default); the scene's\n"
+           "                      header says which, and how much of them lies on huge pages\n"
+           "                      (both: every mode, --builds, --motion, --animate and --save-load included)\n"
+           "  --help              this text\n"
+           "Embree's peers (in the groups all and embree; ratios stay against embree-r4):\n"
+           "  embree-compact      flat r4 with RTC_SCENE_FLAG_COMPACT: Embree's compact mode, the peer in memory of\n"
+           "                      hairobb (about 40 bytes a segment), and of a compact hairobb mode to come\n"
+           "  embree-cycles       Cycles' set-up: flat curves, RTC_SCENE_FLAG_ROBUST, tessellation rate 5; flat\n"
+           "                      Catmull-Rom curves on a Catmull-Rom scene (yeti), as Cycles hands Embree its\n"
+           "                      hair; on a Bezier scene, flat Bezier curves with the same flags and rate\n");
 }
 
 /* Parses a count with an optional k or M suffix; 0 on success. */
@@ -94,6 +116,22 @@ static int parse_count(const char *text, size_t *value)
     return 0;
 }
 
+/* The sizes --scene scale runs combed fur at */
+static const char *const scale_sizes[] = {"2M", "10M"};
+
+static int add_scene(options *o, const char *name, size_t segments, int scale)
+{
+    if (o->scene_count == MAX_SCENES) {
+        fprintf(stderr, "bench: at most %d scenes\n", MAX_SCENES);
+        return 1;
+    }
+    o->scenes[o->scene_count] = name;
+    o->scene_segments[o->scene_count] = segments;
+    o->scene_scale[o->scene_count++] = scale;
+    return 0;
+}
+
+/* --scene: names, NAME:N (a procedural scene of its own size), or scale */
 static int add_scenes(options *o, const char *list)
 {
     char *copy = (char *)malloc(strlen(list) + 1);
@@ -103,11 +141,24 @@ static int add_scenes(options *o, const char *list)
     /* names are kept for the whole run; the copy is never freed */
     char *rest = NULL;
     for (char *name = strtok_r(copy, ",", &rest); name; name = strtok_r(NULL, ",", &rest)) {
-        if (o->scene_count == MAX_SCENES) {
-            fprintf(stderr, "bench: at most %d scenes\n", MAX_SCENES);
-            return 1;
+        char *size = strchr(name, ':');
+        size_t segments = 0;
+        if (strcmp(name, "scale") == 0) {
+            for (size_t k = 0; k < sizeof scale_sizes / sizeof scale_sizes[0]; k++)
+                if (parse_count(scale_sizes[k], &segments) != 0 || add_scene(o, "combed", segments, 1) != 0)
+                    return 1;
+            continue;
         }
-        o->scenes[o->scene_count++] = name;
+        /* a size only after a procedural scene's name: paths may hold colons */
+        if (size && !strchr(name, '/') && !strchr(name, '.')) {
+            *size++ = '\0';
+            if (parse_count(size, &segments) != 0 || segments == 0) {
+                fprintf(stderr, "bench: bad size '%s' for scene %s (see --help)\n", size, name);
+                return 1;
+            }
+        }
+        if (add_scene(o, name, segments, 0) != 0)
+            return 1;
     }
     return 0;
 }
@@ -156,6 +207,7 @@ static void default_options(options *o)
     if (cores > 1)
         o->thread_counts[o->thread_count_count++] = (unsigned)(cores < 256 ? cores : 256);
     o->variant_list = "all";
+    o->strand_order = STRAND_ORDER_UNSET;
     o->rounds = DEFAULT_ROUNDS;
     o->accuracy_rays = DEFAULT_ACCURACY_RAYS;
     o->tsv_path = DEFAULT_TSV_PATH;
@@ -170,7 +222,8 @@ int parse_options(int argc, char **argv, options *o)
 {
     /* the options that take no value */
     const struct { const char *name; int *set; } switches[] = {
-        {"--quiet", &o->quiet}, {"--profile", &o->profile}, {"--motion", &o->motion}, {"--builds", &o->builds}};
+        {"--quiet", &o->quiet}, {"--profile", &o->profile}, {"--motion", &o->motion}, {"--builds", &o->builds},
+        {"--huge-pages", &o->huge_pages}};
     default_options(o);
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i], *value = NULL;
@@ -202,6 +255,13 @@ int parse_options(int argc, char **argv, options *o)
             bad = add_scenes(o, value);
         else if (strcmp(name, "--segments") == 0)
             bad = parse_count(value, &o->segments) || o->segments == 0;
+        else if (strcmp(name, "--strand-order") == 0) {
+            o->strand_order = STRAND_ORDER_UNSET;
+            for (int k = 0; k < STRAND_ORDER_COUNT; k++)
+                if (strcmp(value, strand_order_names[k]) == 0)
+                    o->strand_order = k;
+            bad = o->strand_order == STRAND_ORDER_UNSET;
+        }
         else if (strcmp(name, "--res") == 0) {
             bad = parse_count(value, &count) || count < 1 || count > 16384;
             o->resolution = (int)count;
@@ -251,7 +311,11 @@ int parse_options(int argc, char **argv, options *o)
             return 1;
         }
     }
+    if (o->huge_pages && !huge_pages_supported()) {
+        fprintf(stderr, "bench: --huge-pages needs Linux's madvise(MADV_HUGEPAGE), which this system lacks\n");
+        return 1;
+    }
     if (o->scene_count == 0)
-        o->scenes[o->scene_count++] = "combed";
+        add_scene(o, "combed", 0, 0);
     return 0;
 }

@@ -39,5 +39,7 @@ dumps=$(ls "$out"/callgrind.out.* | sort -t. -k3 -n)
 awk '/^ob=/ { mine = index($0, "bench_profile") > 0 } /^calls=/ { getline; next } mine && /^0x/ { print $1 }' $dumps |
     sort -u | addr2line -a -i -f -e $B/bench_profile > "$out/chains.txt"
 head -n 4 "$out/bench.txt"
+# each scene's line: its segments, strands and their order (procedural scenes: groom unless --strand-order)
+grep -A1 '^=== scene' "$out/bench.txt" | grep -v '^--$'
 echo "callgrind: instructions per ray, 1 thread, the same rays for every variant ($out/profile.md)"
 awk -f bench/profile.awk "$out/counts.txt" "$out/chains.txt" $dumps | tee "$out/profile.md"

@@ -180,11 +180,22 @@ static const variant_result *baseline_of(const scene_result *sr)
     return b->measured ? b : NULL;
 }
 
+/* The scene's line, and where its arrays lie: the first lines of its header
+   (--profile prints these alone). */
+void print_scene_line(const workload *w)
+{
+    const hair_scene *s = &w->scene;
+    char memory[256];
+    printf("\n=== scene %s: %zu segments in %zu strands, %s, bounds (%.3g %.3g %.3g)-(%.3g %.3g %.3g)\n", s->name,
+           s->segment_count, w->layout.strands, layout_order_text(&w->layout), s->lower[0], s->lower[1], s->lower[2],
+           s->upper[0], s->upper[1], s->upper[2]);
+    printf("arrays: %s\n", layout_memory_text(&w->layout, memory, sizeof memory));
+}
+
 void print_scene_header(const options *o, const workload *w)
 {
     const hair_scene *s = &w->scene;
-    printf("\n=== scene %s: %zu segments, bounds (%.3g %.3g %.3g)-(%.3g %.3g %.3g)\n", s->name, s->segment_count,
-           s->lower[0], s->lower[1], s->lower[2], s->upper[0], s->upper[1], s->upper[2]);
+    print_scene_line(w);
     printf("rays: primary %zu (%dx%d pinhole)", w->rays[RAYS_PRIMARY].count, o->resolution, o->resolution);
     if (w->rays[RAYS_INCOHERENT].count || w->rays[RAYS_SHADOW].count)
         printf(", %.1f%% hit by %s; incoherent %zu (diffuse bounce), shadow %zu (point light)",

@@ -5,24 +5,35 @@
 
 const char *const ray_kind_names[RAY_KIND_COUNT] = {"primary", "incoherent", "shadow"};
 
-/* Returns 0 on success, -1 when a file-based scene is absent (skipped; why
-   says what is missing and where to get it), 1 on errors, 2 for an unknown
-   name or a data path that cannot be read (reported here). */
-int load_scene(const options *o, const char *name, hair_scene *s, char why[TEST_DATA_WHY_SIZE])
+/* The segments of --scene's index-th scene: its own (NAME:N, --scene scale)
+   or --segments. */
+size_t scene_segments(const options *o, int index)
+{
+    return index >= 0 && index < o->scene_count && o->scene_segments[index] ? o->scene_segments[index] : o->segments;
+}
+
+/* Makes or reads the scene. Returns 0 on success, -1 when a file-based
+   scene is absent (skipped; why says what is missing and where to get it),
+   1 on errors, 2 for an unknown name or a data path that cannot be read
+   (reported here). */
+static int make_scene(const options *o, const char *name, size_t segments, hair_scene *s, int *from_file,
+                      char why[TEST_DATA_WHY_SIZE])
 {
     const char *path = NULL;
     test_data_status found = TEST_DATA_FOUND;
     snprintf(why, TEST_DATA_WHY_SIZE, "%s: file not found", name);
+    *from_file = 0;
     if (strcmp(name, "combed") == 0)
-        return scene_combed(s, o->segments, 1);
+        return scene_combed(s, segments, 1);
     if (strcmp(name, "curly") == 0)
-        return scene_curly(s, o->segments, 2);
+        return scene_curly(s, segments, 2);
     if (strcmp(name, "random") == 0)
-        return scene_random(s, o->segments, 3);
+        return scene_random(s, segments, 3);
     if (strcmp(name, "crossing") == 0)
-        return scene_crossing(s, o->segments, 4);
+        return scene_crossing(s, segments, 4);
     if (strcmp(name, "yeti") == 0)
-        return scene_yeti(s, o->segments, 5);
+        return scene_yeti(s, segments, 5);
+    *from_file = 1;
     if (strcmp(name, "straight") == 0 || strcmp(name, "furball") == 0) {
         int straight = name[0] == 's';
         path = straight ? o->straight_path : o->furball_path; /* given on the command line */
@@ -41,6 +52,23 @@ int load_scene(const options *o, const char *name, hair_scene *s, char why[TEST_
         return 2;
     }
     return scene_load_hair(s, name);
+}
+
+/* The scene, procedural (of `segments` segments; 0: --segments) or read
+   from a file, with its strands and arrays arranged as --strand-order and
+   --huge-pages say (layout.c); returns as make_scene. */
+int load_scene(const options *o, const char *name, size_t segments, hair_scene *s, scene_layout *layout,
+               char why[TEST_DATA_WHY_SIZE])
+{
+    int from_file;
+    int made = make_scene(o, name, segments ? segments : o->segments, s, &from_file, why);
+    if (made != 0)
+        return made;
+    if (arrange_scene(o, s, from_file, layout) != 0) {
+        scene_free(s);
+        return 1;
+    }
+    return 0;
 }
 
 int ray_set_alloc(ray_set *r, ray_kind kind, size_t count)

@@ -52,7 +52,8 @@ FILE *tsv_open(const options *o)
             fprintf(f, "\t%s_mrays_%ut_min\t%s_mrays_%ut_max\t%s_ratio_%ut\t%s_ratio_%ut_min\t%s_ratio_%ut_max",
                     ray_kind_names[k], o->thread_counts[t], ray_kind_names[k], o->thread_counts[t], ray_kind_names[k],
                     o->thread_counts[t], ray_kind_names[k], o->thread_counts[t], ray_kind_names[k], o->thread_counts[t]);
-    fputs("\n", f);
+    /* the scene's arrays (layout.c): the strands' order, and the memory they are in */
+    fputs("\tstrand_order\tarray_memory\tarray_huge_page_bytes\n", f);
     return f;
 }
 
@@ -92,7 +93,9 @@ void tsv_write_scene(FILE *f, const options *o, const scene_result *sr, const in
                 tsv_number(f, "\t%.4f", r->ratio[k][t].min);
                 tsv_number(f, "\t%.4f", r->ratio[k][t].max);
             }
-        fputs("\n", f);
+        fprintf(f, "\t%s\t%s\t%lld\n", sr->layout.order == STRAND_ORDER_GENERATED && sr->layout.from_file
+                                              ? "file" : strand_order_names[sr->layout.order],
+                sr->layout.huge_pages ? "madvise-hugepage" : "malloc", sr->layout.huge_page_bytes);
     }
     fflush(f);
 }

@@ -9,18 +9,19 @@
 
 #define HAIROBB_ROW(key, label, nodes, layout, spatial, cluster, precision, pieces, on_chart) \
     {key, label, LIB_HAIROBB, HAIROBB_NODES_##nodes, HAIROBB_##layout, HAIROBB_PRECISION_##precision, pieces, \
-     HAIROBB_##spatial, HAIROBB_##cluster, 0, 0, 1, on_chart, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_BEZIER, HAIROBB_AUTO}
+     HAIROBB_##spatial, HAIROBB_##cluster, 0, 0, 1, on_chart, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_BEZIER, HAIROBB_AUTO, 0}
 /* the defaults built on one thread (the build's speed-up), with a filter, or
    traced by the SSE2 kernels (what CPUs without AVX2 get) */
 #define HAIROBB_DEFAULTS_ROW(key, label, build_threads, hit_filter, simd) \
     {key, label, LIB_HAIROBB, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 8, HAIROBB_AUTO, HAIROBB_AUTO, \
-     0, 0, 1, 0, build_threads, hit_filter, HAIROBB_SIMD_##simd, HAIROBB_BASIS_BEZIER, HAIROBB_AUTO}
-#define EMBREE_ROW(key, label, type, rate, comparable, on_chart) \
+     0, 0, 1, 0, build_threads, hit_filter, HAIROBB_SIMD_##simd, HAIROBB_BASIS_BEZIER, HAIROBB_AUTO, 0}
+/* Embree's curves: type, tessellation rate, scene flags */
+#define EMBREE_ROW(key, label, type, rate, flags, comparable, on_chart) \
     {key, label, LIB_EMBREE, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 0, HAIROBB_AUTO, HAIROBB_AUTO, \
-     type, rate, comparable, on_chart, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_BEZIER, HAIROBB_AUTO}
+     type, rate, comparable, on_chart, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_BEZIER, HAIROBB_AUTO, flags}
 #define HAIROBB_BASIS_ROW(key, label, basis, copy) \
     {key, label, LIB_HAIROBB, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 8, HAIROBB_AUTO, HAIROBB_AUTO, \
-     0, 0, 0, 0, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_##basis, HAIROBB_##copy}
+     0, 0, 0, 0, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_##basis, HAIROBB_##copy, 0}
 const variant all_variants[] = {
     /* precision points: exact and pieces-only intersectors, 4 to 16 pieces */
     HAIROBB_ROW("default", "hairobb default", MIXED, OBB_DEFAULT, AUTO, AUTO, EXACT, 8, 1),
@@ -46,10 +47,18 @@ const variant all_variants[] = {
     HAIROBB_BASIS_ROW("catmull-rom-copy", "hairobb C-R + copy", CATMULL_ROM, ON),
     HAIROBB_BASIS_ROW("b-spline", "hairobb B-sp no copy", BSPLINE, OFF),
     HAIROBB_BASIS_ROW("b-spline-copy", "hairobb B-sp + copy", BSPLINE, ON),
-    EMBREE_ROW("embree-r4", "Embree flat r4", EMB_FLAT_BEZIER, 4, 1, 1),
-    EMBREE_ROW("embree-r8", "Embree flat r8", EMB_FLAT_BEZIER, 8, 1, 1),
-    EMBREE_ROW("embree-r16", "Embree flat r16", EMB_FLAT_BEZIER, 16, 1, 1),
-    EMBREE_ROW("embree-round", "Embree round *", EMB_ROUND_BEZIER, 0, 0, 0),
+    /* Embree's default curves (flat, rate 4: the baseline of every ratio) and finer tessellations */
+    EMBREE_ROW("embree-r4", "Embree flat r4", EMB_FLAT_BEZIER, 4, 0, 1, 1),
+    EMBREE_ROW("embree-r8", "Embree flat r8", EMB_FLAT_BEZIER, 8, 0, 1, 1),
+    EMBREE_ROW("embree-r16", "Embree flat r16", EMB_FLAT_BEZIER, 16, 0, 1, 1),
+    /* the peers: Embree's compact mode (about 40 bytes a segment: the peer in
+       memory of hairobb's, and of a compact hairobb mode to come), and
+       Cycles' set-up (robust traversal, rate 5; Cycles hands Embree
+       Catmull-Rom curves, which these rows read on a Catmull-Rom scene, and
+       flat Bezier curves on a Bezier scene) */
+    EMBREE_ROW("embree-compact", "Embree compact r4", EMB_FLAT_BEZIER, 4, RTC_SCENE_FLAG_COMPACT, 1, 0),
+    EMBREE_ROW("embree-cycles", "Embree Cycles r5", EMB_FLAT_BEZIER, 5, RTC_SCENE_FLAG_ROBUST, 1, 0),
+    EMBREE_ROW("embree-round", "Embree round *", EMB_ROUND_BEZIER, 0, 0, 0, 0),
 };
 
 /* VARIANT_COUNT (bench.h) sizes the result arrays: a row added above raises it */
@@ -58,16 +67,20 @@ typedef char variant_table_has_VARIANT_COUNT_rows[sizeof all_variants / sizeof a
 /* Named groups for --variants; "mixed" is the default variant by another name. */
 static const struct { const char *name, *members; } variant_groups[] = {
     {"all", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
-            "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2,embree-r4,embree-r8,embree-r16,embree-round"},
+            "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2,embree-r4,embree-r8,embree-r16,"
+            "embree-compact,embree-cycles,embree-round"},
     {"hairobb", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
                 "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2"},
-    {"embree", "embree-r4,embree-r8,embree-r16,embree-round"},
+    {"embree", "embree-r4,embree-r8,embree-r16,embree-compact,embree-cycles,embree-round"},
     {"precision", "default,exact4,exact16,pieces4,pieces8,pieces16"},
     {"ablation", "aabb,obb,mixed-uncompressed,spatial,spatial-compressed,spatial-compressed-cluster,shared,compressed-shared,default"},
     {"mixed", "default"},
     {"bases", "default,catmull-rom,catmull-rom-copy,b-spline,b-spline-copy"},
-    /* a Catmull-Rom scene (yeti) without --variants: hairobb without the copy, Embree on the same buffers */
-    {"yeti", "catmull-rom,embree-r4,embree-round"},
+    /* a Catmull-Rom scene (yeti) without --variants: hairobb without the copy, Embree on the same buffers
+       (embree-cycles: Cycles' own curves there, flat Catmull-Rom) */
+    {"yeti", "catmull-rom,embree-r4,embree-cycles,embree-round"},
+    /* --scene scale without --variants: the defaults against Embree's default and its compact mode */
+    {"scale", "default,embree-r4,embree-compact"},
 };
 
 int variant_index(const char *key)
@@ -221,9 +234,9 @@ static int build_variant(workload *w, const variant *v, built_accel *b, variant_
         b->tracer = hairobb_tracer(b->bvh);
     } else {
         /* threads 0: Embree builds on every core, as it would in a renderer */
-        b->embree = emb_build_curves(s->vertices, s->vertex_count, s->indices, s->segment_count,
-                                     variant_embree_type(v, s), NULL, v->embree_rate, 0, &r->memory_bytes,
-                                     &r->build_seconds);
+        b->embree = emb_build_curves_flags(s->vertices, s->vertex_count, s->indices, s->segment_count,
+                                           variant_embree_type(v, s), NULL, v->embree_rate, v->embree_flags, 0,
+                                           &r->memory_bytes, &r->build_seconds);
         if (!b->embree)
             return 1;
         b->tracer = embree_tracer(b->embree);

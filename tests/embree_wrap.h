@@ -85,11 +85,13 @@ static inline void emb_free(emb_scene *e)
 
 /* emb_build_curves and emb_build_curves_motion: vertex buffer k (slot k)
    shares time_vertices[k], k < time_steps; time_steps >= 2 sets the
-   geometry's time step count (motion blur), 1 builds static curves. */
+   geometry's time step count (motion blur), 1 builds static curves;
+   scene_flags: RTC_SCENE_FLAG_* (0: none). */
 static inline emb_scene *emb__build_curve_steps(const float *const *time_vertices, unsigned time_steps,
                                                 size_t vertex_count, const uint32_t *indices, size_t segment_count,
-                                                int type, const float *tangents, int tessellation_rate, int threads,
-                                                size_t *memory_bytes, double *build_seconds)
+                                                int type, const float *tangents, int tessellation_rate,
+                                                unsigned scene_flags, int threads, size_t *memory_bytes,
+                                                double *build_seconds)
 {
     static const enum RTCGeometryType types[] = {
         RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE, RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE, RTC_GEOMETRY_TYPE_FLAT_BSPLINE_CURVE,
@@ -150,6 +152,8 @@ static inline emb_scene *emb__build_curve_steps(const float *const *time_vertice
     rtcAttachGeometry(e->scene, geometry);
     rtcReleaseGeometry(geometry); /* the scene holds its own reference */
     rtcSetSceneBuildQuality(e->scene, RTC_BUILD_QUALITY_MEDIUM);
+    if (scene_flags)
+        rtcSetSceneFlags(e->scene, (enum RTCSceneFlags)scene_flags);
 
     int64_t before = emb_allocated_bytes(e);
     double start = scene_now();
@@ -180,7 +184,19 @@ static inline emb_scene *emb_build_curves(const float *vertices, size_t vertex_c
                                           int threads, size_t *memory_bytes, double *build_seconds)
 {
     return emb__build_curve_steps(&vertices, 1, vertex_count, indices, segment_count, type, tangents,
-                                  tessellation_rate, threads, memory_bytes, build_seconds);
+                                  tessellation_rate, 0, threads, memory_bytes, build_seconds);
+}
+
+/* emb_build_curves with scene flags (rtcSetSceneFlags, RTC_SCENE_FLAG_*
+   or'ed; 0 = none): RTC_SCENE_FLAG_COMPACT for Embree's compact leaves and
+   nodes, RTC_SCENE_FLAG_ROBUST for its robust traversal (Cycles sets it). */
+static inline emb_scene *emb_build_curves_flags(const float *vertices, size_t vertex_count, const uint32_t *indices,
+                                                size_t segment_count, int type, const float *tangents,
+                                                int tessellation_rate, unsigned scene_flags, int threads,
+                                                size_t *memory_bytes, double *build_seconds)
+{
+    return emb__build_curve_steps(&vertices, 1, vertex_count, indices, segment_count, type, tangents,
+                                  tessellation_rate, scene_flags, threads, memory_bytes, build_seconds);
 }
 
 /* Moving curves (motion blur), as emb_build_curves without tangents: the
@@ -198,7 +214,7 @@ static inline emb_scene *emb_build_curves_motion(const float *const *time_vertic
         return NULL;
     }
     return emb__build_curve_steps(time_vertices, time_steps, vertex_count, indices, segment_count, type, NULL,
-                                  tessellation_rate, threads, memory_bytes, build_seconds);
+                                  tessellation_rate, 0, threads, memory_bytes, build_seconds);
 }
 
 /* Bezier curves (flat or round): emb_build_curves without tangents. */
