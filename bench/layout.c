@@ -99,18 +99,14 @@ static const char *thp_mode(void)
     return mode;
 }
 
-/* Whether segment i starts a strand: it does unless it starts where the
-   segment before it ends, at the next point for Catmull-Rom segments (which
-   share their points), at the same point for Bezier ones (a repeated or
-   shared joint: scene_motion_steps's rule). */
+/* Whether segment i starts a strand: Catmull-Rom segments of a strand
+   share their points (the next segment starts one point on), Bezier ones
+   repeat or share the joint (tests/scenes.h's rule). */
 static int starts_strand(const hair_scene *s, size_t i)
 {
-    if (i == 0)
-        return 1;
     if (s->basis == SCENE_BASIS_CATMULL_ROM)
-        return s->indices[i] != s->indices[i - 1] + 1;
-    return memcmp(s->vertices + 4 * (size_t)s->indices[i], s->vertices + 4 * ((size_t)s->indices[i - 1] + 3),
-                  3 * sizeof(float)) != 0;
+        return i == 0 || s->indices[i] != s->indices[i - 1] + 1;
+    return scene_bezier_starts_strand(s, i);
 }
 
 /* The first segment of each strand, and one past the last: strand k is

@@ -379,11 +379,19 @@ static inline void scene_motion_free(float **steps, int time_steps)
     }
 }
 
+/* Whether Bezier segment i starts a strand: its first point is not the
+   previous segment's last (independent Bezier segments of a polyline
+   repeat the joint). */
+static inline int scene_bezier_starts_strand(const hair_scene *s, size_t i)
+{
+    return i == 0 || memcmp(s->vertices + 4 * (size_t)s->indices[i], s->vertices + 4 * (size_t)s->indices[i - 1] + 12,
+                            3 * sizeof(float)) != 0;
+}
+
 /* Fills steps[0..time_steps) with arrays of s->vertex_count points (16-byte
    aligned, with the scene's 16 bytes of defined padding): step 0 is the
-   scene as it is, radii are kept. A strand starts at a segment whose first
-   point is not the previous segment's last (independent Bezier segments of
-   a polyline repeat the joint). Rotations are done in double. Returns 0, or
+   scene as it is, radii are kept. A strand starts where
+   scene_bezier_starts_strand says. Rotations are done in double. Returns 0, or
    1 when out of memory (nothing left allocated). */
 static inline int scene_motion_steps(const hair_scene *s, scene_motion motion, double amount, int time_steps, float **steps)
 {
@@ -412,8 +420,7 @@ static inline int scene_motion_steps(const hair_scene *s, scene_motion motion, d
     const float *root = NULL;
     for (size_t i = 0; i < s->segment_count; i++) {
         const float *first = s->vertices + 4 * (size_t)s->indices[i];
-        if (i == 0 || memcmp(first, s->vertices + 4 * (size_t)s->indices[i - 1] + 12, 3 * sizeof(float)) != 0)
-            root = first;
+        if (scene_bezier_starts_strand(s, i)) root = first;
         double axis[3], length = 0.0;
         for (int a = 0; a < 3; a++) {
             axis[a] = (double)root[a] - centre[a];
