@@ -1096,10 +1096,18 @@ typedef struct hairobb__tree_settings {
 } hairobb__tree_settings;
 
 struct hairobb_bvh {
-    const float *vertices;            /* Bezier control points: the caller's, or curves */
-    const uint32_t *indices;
+    const float *vertices;            /* the caller's control points, in basis (NULL after the build
+                                         where the copy made them unneeded: other bases) */
+    const uint32_t *indices;          /* the caller's, or their copy (owned_indices) */
     size_t segment_count;
-    void *curves;                     /* segments of other bases converted to Bezier, owned */
+    /* the copy (bezier_copy ON, static hair): each leaf reference's Bezier
+       control points, 16 floats, in leaf_prims' order, on 64-byte lines
+       inside points_allocation; point_refs[prim] is one reference of
+       each segment, for reads by segment id. NULL without the copy. */
+    void *points_allocation;
+    const float *leaf_points;
+    uint32_t *point_refs;
+    uint32_t *owned_indices;          /* other bases with the copy: the caller's indices, for hairobb_refit */
     hairobb_filter_fn hit_filter;
     void *hit_filter_user;
     void *allocator_user;
@@ -1132,15 +1140,16 @@ struct hairobb_bvh {
     /* Bernstein weights of the pieces' start and end points: [chunk][start/end][basis][lane] */
     float piece_weights[2][2][4][8];
     hairobb_stats stats;
-    /* how vertices and indices hold segments: Bezier (Bezier input, or the
-       copy in curves), or the caller's arrays in basis, with tangents */
+    /* how vertices and indices hold segments: the caller's arrays in
+       basis, with tangents */
     hairobb_basis point_basis;
     const float *tangents;
     /* motion blur: time_steps >= 2 arrays (vertices = time_vertices[0]),
        the pointers owned; 0 for a static BVH */
     unsigned time_steps;
     const float **time_vertices;
-    int points_in_place;              /* static Bezier points (input or copy): read where they are */
+    int points_in_place;              /* static Bezier input: the caller's points as they are */
+    int copy_points;                  /* bezier_copy resolved: ON for static hair, else 0 */
 };
 
 
@@ -1321,47 +1330,12 @@ static const float **hairobb__copy_steps(const float *const *time_vertices, unsi
     return copy;
 }
 
-/* Segments of another basis in Bezier form: 16 floats each, then the
-   indices 4 i, then a copy of the caller's indices (hairobb_refit converts
-   new points again; the caller's arrays need not outlive the build); NULL
-   when out of memory. hairobb_build and hairobb_load convert alike. */
-/* Bytes of the Bezier curves other bases are converted to: 16 floats,
-   their index and the caller's index per segment. */
-static size_t hairobb__curve_bytes(size_t segment_count)
-{
-    return (16 * sizeof(float) + 2 * sizeof(uint32_t)) * segment_count;
-}
-
-/* Every segment of another basis in Bezier form, 16 floats each, into
-   curves (the build's and the load's conversion, and a refit's again). */
-static void hairobb__to_bezier_all(hairobb_basis basis, const float *vertices, const uint32_t *indices,
-                                   const float *tangents, size_t segment_count, float *curves)
-{
-    size_t i;
-    for (i = 0; i < segment_count; ++i) {
-        size_t at = 4 * (size_t)indices[i];
-        hairobb__to_bezier(basis, vertices + at, tangents ? tangents + at : NULL, curves + 16 * i);
-    }
-}
-
-static float *hairobb__convert_curves(hairobb_basis basis, const float *vertices, const uint32_t *indices,
-                                      const float *tangents, size_t segment_count, void *user)
-{
-    float *curves = HAIROBB__CAST(float *, hairobb__malloc_large(hairobb__curve_bytes(segment_count), user));
-    uint32_t *curve_indices;
-    size_t i;
-    if (!curves) return NULL;
-    hairobb__to_bezier_all(basis, vertices, indices, tangents, segment_count, curves);
-    curve_indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, curves + 16 * segment_count));
-    for (i = 0; i < segment_count; ++i) curve_indices[i] = (uint32_t)(4 * i);
-    memcpy(curve_indices + segment_count, indices, segment_count * sizeof(uint32_t));
-    return curves;
-}
-
 /* The hair a BVH traces, as hairobb_build and hairobb_load take it (arrays
-   validated): the caller's arrays, or for other bases with bezier_copy not
-   OFF (static hair) their Bezier copy; moving hair keeps the steps'
-   pointers. 0: out of memory (hairobb_free frees what was taken). */
+   validated): the caller's arrays, read in their basis; moving hair keeps
+   the steps' pointers. With the copy (hairobb__copy_points, once the
+   leaves are known), other bases keep a copy of the caller's indices, so
+   that their arrays may go after the build. 0: out of memory
+   (hairobb_free frees what was taken). */
 static int hairobb__take_hair(hairobb_bvh *bvh, const hairobb_build_options *opt, const float *vertices,
                               size_t vertex_count, const uint32_t *indices, size_t segment_count, unsigned steps)
 {
@@ -1371,21 +1345,20 @@ static int hairobb__take_hair(hairobb_bvh *bvh, const hairobb_build_options *opt
     bvh->vertex_count = vertex_count;
     bvh->segment_count = segment_count;
     bvh->basis = opt->basis;
+    bvh->point_basis = opt->basis;
+    bvh->tangents = opt->tangents;
     if (steps) {
         bvh->time_vertices = hairobb__copy_steps(opt->time_vertices, steps, bvh->allocator_user);
         if (!bvh->time_vertices) return 0;
         bvh->time_steps = steps;
     }
-    if (opt->basis != HAIROBB_BASIS_BEZIER && opt->bezier_copy != HAIROBB_OFF && !steps) {
-        float *curves = hairobb__convert_curves(opt->basis, vertices, indices, opt->tangents, segment_count, bvh->allocator_user);
-        if (!curves) return 0;
-        bvh->curves = curves;
-        bvh->vertices = curves;
-        bvh->indices = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, curves + 16 * segment_count));
-        bvh->source_indices = bvh->indices + segment_count;
-    } else {
-        bvh->point_basis = opt->basis;
-        bvh->tangents = opt->tangents;
+    bvh->copy_points = opt->bezier_copy != HAIROBB_OFF && !steps;
+    if (bvh->copy_points && opt->basis != HAIROBB_BASIS_BEZIER) {
+        bvh->owned_indices = HAIROBB__CAST(uint32_t *, hairobb__malloc_large(segment_count * sizeof(uint32_t), bvh->allocator_user));
+        if (!bvh->owned_indices) return 0;
+        memcpy(bvh->owned_indices, indices, segment_count * sizeof(uint32_t));
+        bvh->indices = bvh->owned_indices;
+        bvh->source_indices = bvh->owned_indices;
     }
     bvh->points_in_place = bvh->point_basis == HAIROBB_BASIS_BEZIER && !steps;
     return 1;
@@ -4436,6 +4409,48 @@ static hairobb_result hairobb__build_leaves(hairobb__builder *b, hairobb_bvh *bv
     return HAIROBB_OK;
 }
 
+/* The copy's bytes: 64 a leaf reference, 4 a segment (point_refs), and
+   room to start on a 64-byte line. */
+static size_t hairobb__copy_bytes(size_t leaf_references, size_t segment_count)
+{
+    return 16 * sizeof(float) * leaf_references + sizeof(uint32_t) * segment_count + 64;
+}
+
+/* The copy (bezier_copy ON, static hair): each leaf reference's Bezier
+   control points in leaf order, read from the caller's arrays (other
+   bases converted as the build read them: the same floats), so that a
+   leaf's segments lie on consecutive 64-byte lines, and point_refs.
+   hairobb_refit writes the points again into the same memory. Every
+   segment has a reference in a built tree; a loaded tree without one for
+   some segment is INVALID_FILE. */
+static hairobb_result hairobb__copy_points(hairobb_bvh *bvh)
+{
+    size_t refs = bvh->leaf_prim_count, i;
+    float *points;
+    if (!bvh->copy_points) return HAIROBB_OK;
+    if (!bvh->points_allocation) {
+        unsigned char *block = HAIROBB__CAST(unsigned char *, hairobb__malloc_large(hairobb__copy_bytes(refs, bvh->segment_count),
+                                                                                      bvh->allocator_user));
+        if (!block) return HAIROBB_ERROR_OUT_OF_MEMORY;
+        bvh->points_allocation = block;
+        bvh->leaf_points = HAIROBB__CAST(float *, HAIROBB__CAST(void *, hairobb__align64(block)));
+        bvh->point_refs = HAIROBB__CAST(uint32_t *, HAIROBB__CAST(void *, bvh->leaf_points + 16 * refs));
+        memset(bvh->point_refs, 0xff, sizeof(uint32_t) * bvh->segment_count);
+        for (i = refs; i-- > 0;) bvh->point_refs[bvh->leaf_prims[i]] = (uint32_t)i;   /* its first */
+        for (i = 0; i < bvh->segment_count; ++i)
+            if (bvh->point_refs[i] == 0xffffffffu) return HAIROBB_ERROR_INVALID_FILE;
+    }
+    points = HAIROBB__CAST(float *, bvh->leaf_points);
+    for (i = 0; i < refs; ++i) {
+        size_t at = 4 * (size_t)bvh->indices[bvh->leaf_prims[i]];
+        if (bvh->point_basis == HAIROBB_BASIS_BEZIER)
+            memcpy(points + 16 * i, bvh->vertices + at, 16 * sizeof(float));
+        else
+            hairobb__to_bezier(bvh->point_basis, bvh->vertices + at, bvh->tangents ? bvh->tangents + at : NULL, points + 16 * i);
+    }
+    return HAIROBB_OK;
+}
+
 /* ------------------------------------------------------------------------ */
 /* >>build_api  Building: hairobb_build, hairobb_free, memory and stats     */
 /* ------------------------------------------------------------------------ */
@@ -4459,7 +4474,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     if (result == HAIROBB_OK) result = hairobb__validate_hair(&opt, &vertices, vertex_count, indices, segment_count, &steps);
     if (result != HAIROBB_OK) return result;
     extra = opt.spatial_splits == HAIROBB_ON ? (size_t)((double)segment_count * opt.spatial_split_budget) : 0;
-    if (segment_count > (size_t)-1 / 2 - extra || segment_count > (size_t)-1 / (16 * sizeof(float) + 2 * sizeof(uint32_t)) ||
+    if (segment_count > (size_t)-1 / 2 - extra || segment_count + extra > (size_t)-1 / (16 * sizeof(float) + 2 * sizeof(uint32_t)) ||
         segment_count + extra > (size_t)-1 / (6 * sizeof(float)) || segment_count + extra > 0xffffffffu)
         return HAIROBB_ERROR_TOO_LARGE;
 
@@ -4472,7 +4487,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     b.error = HAIROBB_ERROR_OUT_OF_MEMORY;
     if (!hairobb__builder_start(&b, &opt, segment_count, extra, steps) || !bvh) goto failed;
     if (!hairobb__take_hair(bvh, &opt, vertices, vertex_count, indices, segment_count, steps)) goto failed;
-    /* the builder reads the points as tracing will: the copy, or the caller's */
+    /* the builder reads the caller's points as tracing reads them without the copy */
     b.vertices = bvh->vertices;
     b.indices = bvh->indices;
     b.basis = bvh->point_basis;
@@ -4482,6 +4497,9 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     if (b.error == HAIROBB_OK) b.error = hairobb__build_leaves(&b, bvh, &opt, segment_count);
     if (b.error != HAIROBB_OK) goto failed;
     hairobb__builder_free(&b);
+    b.error = hairobb__copy_points(bvh);
+    if (b.error != HAIROBB_OK) goto failed;
+    if (bvh->copy_points && bvh->point_basis != HAIROBB_BASIS_BEZIER) bvh->vertices = NULL, bvh->tangents = NULL;   /* never read again */
     hairobb__pad_box(bvh->lower, bvh->upper);
     tree.precision = opt.precision;
     tree.policy = opt.nodes;
@@ -4505,7 +4523,8 @@ HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh)
     void *user;
     if (!bvh) return;
     user = bvh->allocator_user;
-    if (bvh->curves) HAIROBB_FREE(bvh->curves, user);
+    if (bvh->points_allocation) HAIROBB_FREE(bvh->points_allocation, user);
+    if (bvh->owned_indices) HAIROBB_FREE(bvh->owned_indices, user);
     if (bvh->time_vertices) HAIROBB_FREE(HAIROBB__CAST(void *, bvh->time_vertices), user);
     if (bvh->node_allocation) HAIROBB_FREE(bvh->node_allocation, user);
     if (bvh->leaf_prims) HAIROBB_FREE(bvh->leaf_prims, user);
@@ -4517,7 +4536,8 @@ HAIROBB_DEF size_t hairobb_memory_bytes(const hairobb_bvh *bvh)
 {
     if (!bvh) return 0;
     return sizeof *bvh + (bvh->node_allocation ? bvh->node_bytes + 64 : 0) + hairobb__leaf_bytes(bvh) +
-           (bvh->curves ? hairobb__curve_bytes(bvh->segment_count) : 0) + bvh->time_steps * sizeof *bvh->time_vertices;
+           (bvh->points_allocation ? hairobb__copy_bytes(bvh->leaf_prim_count, bvh->segment_count) : 0) +
+           (bvh->owned_indices ? sizeof(uint32_t) * bvh->segment_count : 0) + bvh->time_steps * sizeof *bvh->time_vertices;
 }
 
 HAIROBB_DEF void hairobb_get_stats(const hairobb_bvh *bvh, hairobb_stats *stats)
@@ -4861,12 +4881,11 @@ HAIROBB_DEF hairobb_result hairobb_refit_tangents(hairobb_bvh *bvh, const float 
     /* all checked before anything is written: on an error the BVH traces the old positions */
     result = hairobb__validate(vertices, bvh->vertex_count, indices, bvh->segment_count, hairobb__basis_points(bvh->basis), tangents);
     if (result != HAIROBB_OK) return result;
-    if (!bvh->curves) {
-        bvh->vertices = vertices;
-        bvh->tangents = tangents;
-    } else
-        hairobb__to_bezier_all(bvh->basis, vertices, indices, tangents, bvh->segment_count, HAIROBB__CAST(float *, bvh->curves));
-    hairobb__refit_tree(bvh);
+    bvh->vertices = vertices;
+    bvh->tangents = tangents;
+    (void)hairobb__copy_points(bvh);   /* its memory is there: cannot fail */
+    hairobb__refit_tree(bvh);           /* from the caller's new points, as the build read them */
+    if (bvh->copy_points && bvh->point_basis != HAIROBB_BASIS_BEZIER) bvh->vertices = NULL, bvh->tangents = NULL;
     return HAIROBB_OK;
 }
 
@@ -5332,7 +5351,9 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
         goto failed;
     }
     result = hairobb__load_tree(bvh, in, &saved, segment_count, &stats);
+    if (result == HAIROBB_OK) result = hairobb__copy_points(bvh);
     if (result != HAIROBB_OK) goto failed;
+    if (bvh->copy_points && bvh->point_basis != HAIROBB_BASIS_BEZIER) bvh->vertices = NULL, bvh->tangents = NULL;
     for (k = 0; k < 3; ++k) {
         memcpy(&bvh->lower[k], in + HAIROBB__AT_BOUNDS + 4 * k, sizeof(float));
         memcpy(&bvh->upper[k], in + HAIROBB__AT_BOUNDS + 12 + 4 * k, sizeof(float));
@@ -5901,8 +5922,9 @@ static const float *hairobb__made_moving(const hairobb_bvh *bvh, uint32_t prim, 
    rounds). scratch: room for points made on the fly. */
 HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
 {
-    /* likely: the default's layout, the other paths out of its way */
-    if (HAIROBB__LIKELY(bvh->points_in_place)) return bvh->vertices + 4 * (size_t)bvh->indices[prim];
+    /* likely: the default's copy, the other paths out of its way */
+    if (HAIROBB__LIKELY(bvh->leaf_points != NULL)) return bvh->leaf_points + 16 * (size_t)bvh->point_refs[prim];
+    if (bvh->points_in_place) return bvh->vertices + 4 * (size_t)bvh->indices[prim];
     HAIROBB__POINTS_MADE();
     if (!bvh->time_steps) {
         size_t at = 4 * (size_t)bvh->indices[prim];
@@ -6535,14 +6557,15 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
    (Culling 4 segments at once with SIMD measured slower: leaves hold
    about one segment.) Inlined into the leaf loop: out of line, its frame's
    set-up and tear-down cost 47 of combed's 2,371 instructions a ray. */
-HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint32_t prim, int any_hit)
+HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint32_t prim,
+                                               const float *cp, int any_hit)
 {
     hairobb__ray_curve c;
     hairobb__v4 qx, qy, qz, x, y, z, r, reach, neg_reach;
-    float max_r, magnitude, scratch[16];
+    float max_r, magnitude;
     int inside;
     HAIROBB__COUNT(segment);
-    hairobb__ray_points_v4(rs, hairobb__segment_points(bvh, prim, rs->time, scratch), &qx, &qy, &qz, &r);
+    hairobb__ray_points_v4(rs, cp, &qx, &qy, &qz, &r);
     x = hairobb__ray_row_v4(rs, 0, qx, qy, qz);
     y = hairobb__ray_row_v4(rs, 1, qx, qy, qz);
     max_r = hairobb__v4_hmax(r);
@@ -6583,10 +6606,8 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
 }
 
 /* The segment a secondary ray leaves, or one joined to its ends. */
-static int hairobb__skipped(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint32_t prim)
+static int hairobb__skipped(const hairobb__ray_state *rs, uint32_t prim, const float *cp)
 {
-    float scratch[16];
-    const float *cp = hairobb__segment_points(bvh, prim, rs->time, scratch);
     return prim == rs->skip_prim ||
            (cp[0] == rs->skip_last[0] && cp[1] == rs->skip_last[1] && cp[2] == rs->skip_last[2]) ||
            (cp[12] == rs->skip_first[0] && cp[13] == rs->skip_first[1] && cp[14] == rs->skip_first[2]);
@@ -6595,18 +6616,22 @@ static int hairobb__skipped(const hairobb_bvh *bvh, const hairobb__ray_state *rs
 static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint64_t ref, int any_hit)
 {
     size_t first = (size_t)(ref >> 8), count = (size_t)((ref >> 4) & 15u), i;
+    const float *copy = bvh->leaf_points ? bvh->leaf_points + 16 * first : NULL;
     int found = 0, hit;
     for (i = 0; i < count; ++i) {
         uint32_t prim = bvh->leaf_prims[first + i];
+        float scratch[16];
+        /* the copy: the leaf's points on its own lines, no load waits for prim */
+        const float *cp = copy ? copy + 16 * i : hairobb__segment_points(bvh, prim, rs->time, scratch);
         if (HAIROBB__LEAF_VISIT(rs, prim)) continue;
-        if (rs->skip_t > 0.0f && hairobb__skipped(bvh, rs, prim)) {
+        if (rs->skip_t > 0.0f && hairobb__skipped(rs, prim, cp)) {
             /* this segment alone is tested from skip_t on */
             float tnear = rs->tnear;
             rs->tnear = hairobb__maxf(tnear, rs->skip_t);
-            hit = rs->tnear <= rs->tfar && hairobb__intersect_segment(bvh, rs, prim, any_hit);
+            hit = rs->tnear <= rs->tfar && hairobb__intersect_segment(bvh, rs, prim, cp, any_hit);
             rs->tnear = tnear;
         } else {
-            hit = hairobb__intersect_segment(bvh, rs, prim, any_hit);
+            hit = hairobb__intersect_segment(bvh, rs, prim, cp, any_hit);
         }
         if (hit) {
             found = 1;

@@ -43,6 +43,9 @@ const variant all_variants[] = {
     HAIROBB_DEFAULTS_ROW("build-1t", "hairobb built on 1t", 1, 0, AUTO),
     HAIROBB_DEFAULTS_ROW("filter", "hairobb + hit filter", 0, 1, AUTO),
     HAIROBB_DEFAULTS_ROW("sse2", "hairobb SSE2 path", 0, 0, SSE2),
+    /* the defaults without the copy (bezier_copy OFF): the caller's arrays read where they are */
+    {"no-copy", "hairobb no copy", LIB_HAIROBB, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 8, HAIROBB_AUTO,
+     HAIROBB_AUTO, 0, 0, 1, 0, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_BEZIER, HAIROBB_OFF, 0},
     HAIROBB_BASIS_ROW("catmull-rom", "hairobb C-R no copy", CATMULL_ROM, OFF),
     HAIROBB_BASIS_ROW("catmull-rom-copy", "hairobb C-R + copy", CATMULL_ROM, ON),
     HAIROBB_BASIS_ROW("b-spline", "hairobb B-sp no copy", BSPLINE, OFF),
@@ -67,10 +70,10 @@ typedef char variant_table_has_VARIANT_COUNT_rows[sizeof all_variants / sizeof a
 /* Named groups for --variants; "mixed" is the default variant by another name. */
 static const struct { const char *name, *members; } variant_groups[] = {
     {"all", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
-            "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2,embree-r4,embree-r8,embree-r16,"
+            "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2,no-copy,embree-r4,embree-r8,embree-r16,"
             "embree-compact,embree-cycles,embree-round"},
     {"hairobb", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
-                "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2"},
+                "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2,no-copy"},
     {"embree", "embree-r4,embree-r8,embree-r16,embree-compact,embree-cycles,embree-round"},
     {"precision", "default,exact4,exact16,pieces4,pieces8,pieces16"},
     {"ablation", "aabb,obb,mixed-uncompressed,spatial,spatial-compressed,spatial-compressed-cluster,shared,compressed-shared,default"},
@@ -79,8 +82,9 @@ static const struct { const char *name, *members; } variant_groups[] = {
     /* a Catmull-Rom scene (yeti) without --variants: hairobb without the copy, Embree on the same buffers
        (embree-cycles: Cycles' own curves there, flat Catmull-Rom) */
     {"yeti", "catmull-rom,embree-r4,embree-cycles,embree-round"},
-    /* --scene scale without --variants: the defaults against Embree's default and its compact mode */
-    {"scale", "default,embree-r4,embree-compact"},
+    /* --scene scale without --variants: the defaults (the copy, and without it) against Embree's
+       default and its compact mode */
+    {"scale", "default,no-copy,embree-r4,embree-compact"},
 };
 
 int variant_index(const char *key)

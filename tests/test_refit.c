@@ -406,7 +406,9 @@ static void check_bases(const hair_scene *a, const float *pose)
         opt.tangents = hermite ? tangents_b : NULL;
         CHECK(hairobb_build(pose, a->vertex_count, a->indices, a->segment_count, &opt, &fresh) == HAIROBB_OK, "%s: fresh build", names[b]);
         if (!bvh || !fresh || !original) continue;
-        CHECK(hairobb_memory_bytes(bvh) == sizeof(hairobb_bvh) + bvh->node_bytes + 64 + 4 * bvh->leaf_prim_count + 72 * a->segment_count,
+        /* nodes, leaf_prims, the copy (64 bytes a reference, point_refs, its alignment) and the caller's indices */
+        CHECK(hairobb_memory_bytes(bvh) == sizeof(hairobb_bvh) + bvh->node_bytes + 64 + 4 * bvh->leaf_prim_count +
+                                               64 * bvh->leaf_prim_count + 64 + 8 * a->segment_count,
               "%s: memory %zu", names[b], hairobb_memory_bytes(bvh));
         if (hermite) CHECK(hairobb_refit(bvh, pose) == HAIROBB_ERROR_INVALID_ARGUMENT, "Hermite refit without tangents");
         memcpy(moved, pose, bytes);

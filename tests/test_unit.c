@@ -497,7 +497,8 @@ __attribute__((target("avx2")))
 #endif
 static int segment_test(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint32_t prim)
 {
-    return hairobb__intersect_segment(bvh, rs, prim, 0);
+    float scratch[16];
+    return hairobb__intersect_segment(bvh, rs, prim, hairobb__segment_points(bvh, prim, rs->time, scratch), 0);
 }
 
 /* Segment prim alone hits the ray first at exactly t: two segments the ray
