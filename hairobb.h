@@ -4416,17 +4416,44 @@ static size_t hairobb__copy_bytes(size_t leaf_references, size_t segment_count)
     return 16 * sizeof(float) * leaf_references + sizeof(uint32_t) * segment_count + 64;
 }
 
+/* The copy's tasks: consecutive ranges of the leaf references. */
+#define HAIROBB__COPY_TASK 65536u   /* references a task, at least */
+typedef struct hairobb__copy_job {
+    hairobb_bvh *bvh;
+    size_t per_task;
+    unsigned char ran[HAIROBB__TASKS];
+} hairobb__copy_job;
+
+static void hairobb__copy_task(void *context, unsigned index)
+{
+    hairobb__copy_job *job = HAIROBB__CAST(hairobb__copy_job *, context);
+    const hairobb_bvh *bvh = job->bvh;
+    float *points = HAIROBB__CAST(float *, bvh->leaf_points);
+    size_t i = (size_t)index * job->per_task, end = i + job->per_task;
+    if (end > bvh->leaf_prim_count) end = bvh->leaf_prim_count;
+    for (; i < end; ++i) {
+        size_t at = 4 * (size_t)bvh->indices[bvh->leaf_prims[i]];
+        if (bvh->point_basis == HAIROBB_BASIS_BEZIER)
+            memcpy(points + 16 * i, bvh->vertices + at, 16 * sizeof(float));
+        else
+            hairobb__to_bezier(bvh->point_basis, bvh->vertices + at, bvh->tangents ? bvh->tangents + at : NULL, points + 16 * i);
+    }
+    job->ran[index] = 1;
+}
+
 /* The copy (bezier_copy ON, static hair): each leaf reference's Bezier
    control points in leaf order, read from the caller's arrays (other
    bases converted as the build read them: the same floats), so that a
    leaf's segments lie on consecutive 64-byte lines, and point_refs.
    hairobb_refit writes the points again into the same memory. Every
    segment has a reference in a built tree; a loaded tree without one for
-   some segment is INVALID_FILE. */
+   some segment is INVALID_FILE. On the BVH's threads (or parallel_for):
+   the caller's arrays are read in no order of memory. */
 static hairobb_result hairobb__copy_points(hairobb_bvh *bvh)
 {
     size_t refs = bvh->leaf_prim_count, i;
-    float *points;
+    unsigned tasks, k;
+    hairobb__copy_job job;
     if (!bvh->copy_points) return HAIROBB_OK;
     if (!bvh->points_allocation) {
         unsigned char *block = HAIROBB__CAST(unsigned char *, hairobb__malloc_large(hairobb__copy_bytes(refs, bvh->segment_count),
@@ -4440,14 +4467,25 @@ static hairobb_result hairobb__copy_points(hairobb_bvh *bvh)
         for (i = 0; i < bvh->segment_count; ++i)
             if (bvh->point_refs[i] == 0xffffffffu) return HAIROBB_ERROR_INVALID_FILE;
     }
-    points = HAIROBB__CAST(float *, bvh->leaf_points);
-    for (i = 0; i < refs; ++i) {
-        size_t at = 4 * (size_t)bvh->indices[bvh->leaf_prims[i]];
-        if (bvh->point_basis == HAIROBB_BASIS_BEZIER)
-            memcpy(points + 16 * i, bvh->vertices + at, 16 * sizeof(float));
-        else
-            hairobb__to_bezier(bvh->point_basis, bvh->vertices + at, bvh->tangents ? bvh->tangents + at : NULL, points + 16 * i);
+    memset(&job, 0, sizeof job);
+    job.bvh = bvh;
+    job.per_task = refs / HAIROBB__TASKS + 1;
+    if (job.per_task < HAIROBB__COPY_TASK) job.per_task = HAIROBB__COPY_TASK;
+    tasks = (unsigned)((refs + job.per_task - 1) / job.per_task);
+    if (tasks <= 1) {
+        hairobb__copy_task(&job, 0);
+    } else if (bvh->parallel_for) {
+        bvh->parallel_for(bvh->parallel_for_user, tasks, hairobb__copy_task, &job);
+    } else {
+        hairobb__pool pool;
+        memset(&pool, 0, sizeof pool);
+        pool.task_count = tasks;
+        pool.run = hairobb__copy_task;
+        pool.context = &job;
+        hairobb__run_tasks_on_threads(&pool, bvh->threads);
     }
+    for (k = 0; k < tasks; ++k)
+        if (!job.ran[k]) hairobb__copy_task(&job, k);   /* those a user's parallel_for skipped */
     return HAIROBB_OK;
 }
 
@@ -4497,9 +4535,6 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     if (b.error == HAIROBB_OK) b.error = hairobb__build_leaves(&b, bvh, &opt, segment_count);
     if (b.error != HAIROBB_OK) goto failed;
     hairobb__builder_free(&b);
-    b.error = hairobb__copy_points(bvh);
-    if (b.error != HAIROBB_OK) goto failed;
-    if (bvh->copy_points && bvh->point_basis != HAIROBB_BASIS_BEZIER) bvh->vertices = NULL, bvh->tangents = NULL;   /* never read again */
     hairobb__pad_box(bvh->lower, bvh->upper);
     tree.precision = opt.precision;
     tree.policy = opt.nodes;
@@ -4508,6 +4543,9 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     tree.pieces = opt.curve_pieces;
     hairobb__set_settings(bvh, &opt, simd, &tree);
     hairobb__set_stats(bvh, &b.stats);
+    b.error = hairobb__copy_points(bvh);   /* on the threads set */
+    if (b.error != HAIROBB_OK) goto failed;
+    if (bvh->copy_points && bvh->point_basis != HAIROBB_BASIS_BEZIER) bvh->vertices = NULL, bvh->tangents = NULL;   /* never read again */
     *out = bvh;
     return HAIROBB_OK;
 
@@ -5351,15 +5389,16 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
         goto failed;
     }
     result = hairobb__load_tree(bvh, in, &saved, segment_count, &stats);
-    if (result == HAIROBB_OK) result = hairobb__copy_points(bvh);
     if (result != HAIROBB_OK) goto failed;
-    if (bvh->copy_points && bvh->point_basis != HAIROBB_BASIS_BEZIER) bvh->vertices = NULL, bvh->tangents = NULL;
     for (k = 0; k < 3; ++k) {
         memcpy(&bvh->lower[k], in + HAIROBB__AT_BOUNDS + 4 * k, sizeof(float));
         memcpy(&bvh->upper[k], in + HAIROBB__AT_BOUNDS + 12 + 4 * k, sizeof(float));
     }
     hairobb__set_settings(bvh, &opt, simd, &saved.tree);
     hairobb__set_stats(bvh, &stats);
+    result = hairobb__copy_points(bvh);
+    if (result != HAIROBB_OK) goto failed;
+    if (bvh->copy_points && bvh->point_basis != HAIROBB_BASIS_BEZIER) bvh->vertices = NULL, bvh->tangents = NULL;
     *out = bvh;
     return HAIROBB_OK;
 

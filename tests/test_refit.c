@@ -371,13 +371,15 @@ static void check_bad_input(const hair_scene *a, const float *pose)
     hairobb_free(reference);
 }
 
-/* Other bases keep the caller's indices and convert each refit's points
-   again; the caller's arrays may go after the refit. Hermite takes new
-   tangents (hairobb_refit_tangents). */
+/* With the copy (the default) each refit writes the copy's points again,
+   converted from other bases, and tracing reads no caller's array: the
+   vertices may go after the refit. Other bases keep a copy of the caller's
+   indices too. Hermite takes new tangents (hairobb_refit_tangents). */
 static void check_bases(const hair_scene *a, const float *pose)
 {
-    static const hairobb_basis bases[] = {HAIROBB_BASIS_BSPLINE, HAIROBB_BASIS_CATMULL_ROM, HAIROBB_BASIS_HERMITE, HAIROBB_BASIS_LINEAR};
-    static const char *names[] = {"B-spline", "Catmull-Rom", "Hermite", "linear"};
+    static const hairobb_basis bases[] = {HAIROBB_BASIS_BSPLINE, HAIROBB_BASIS_CATMULL_ROM, HAIROBB_BASIS_HERMITE, HAIROBB_BASIS_LINEAR,
+                                          HAIROBB_BASIS_BEZIER};
+    static const char *names[] = {"B-spline", "Catmull-Rom", "Hermite", "linear", "Bezier"};
     size_t bytes = 16 * a->vertex_count;
     float *tangents_a = (float *)malloc(bytes), *tangents_b = (float *)malloc(bytes), *moved = (float *)malloc(bytes);
     float org[3 * RAYS], dir[3 * RAYS];
@@ -394,9 +396,10 @@ static void check_bases(const hair_scene *a, const float *pose)
     posed.vertices = (float *)pose;
     scene_update_bounds(&posed);
     make_rays(&posed, org, dir);
-    for (b = 0; b < 4; ++b) {
+    for (b = 0; b < 5; ++b) {
         hairobb_build_options opt;
         hairobb_bvh *bvh = NULL, *fresh = NULL, *original = NULL;
+        size_t indices_copy = bases[b] == HAIROBB_BASIS_BEZIER ? 0 : 4;
         int hermite = bases[b] == HAIROBB_BASIS_HERMITE, differ, hits;
         memset(&opt, 0, sizeof opt);
         opt.basis = bases[b];
@@ -408,7 +411,7 @@ static void check_bases(const hair_scene *a, const float *pose)
         if (!bvh || !fresh || !original) continue;
         /* nodes, leaf_prims, the copy (64 bytes a reference, point_refs, its alignment) and the caller's indices */
         CHECK(hairobb_memory_bytes(bvh) == sizeof(hairobb_bvh) + bvh->node_bytes + 64 + 4 * bvh->leaf_prim_count +
-                                               64 * bvh->leaf_prim_count + 64 + 8 * a->segment_count,
+                                               64 * bvh->leaf_prim_count + 64 + (4 + indices_copy) * a->segment_count,
               "%s: memory %zu", names[b], hairobb_memory_bytes(bvh));
         if (hermite) CHECK(hairobb_refit(bvh, pose) == HAIROBB_ERROR_INVALID_ARGUMENT, "Hermite refit without tangents");
         memcpy(moved, pose, bytes);

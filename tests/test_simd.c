@@ -204,10 +204,12 @@ int main(void)
             compare_paths(&scenes[k], &options, "compressed, shared byte rotation");
         }
         {
-            /* other bases through the same points, read without the copy
-               and, for one, with it; Hermite takes the points as its
+            /* Bezier without the copy (the caller's arrays), other bases
+               through the same points, read without the copy and, for
+               one, with it; Hermite takes the points as its
                tangents too */
             static const struct { const char *name; hairobb_basis basis; hairobb_switch copy; } bases[] = {
+                {"Bezier, no copy", HAIROBB_BASIS_BEZIER, HAIROBB_OFF},
                 {"B-spline, no copy", HAIROBB_BASIS_BSPLINE, HAIROBB_OFF},
                 {"Catmull-Rom, no copy", HAIROBB_BASIS_CATMULL_ROM, HAIROBB_OFF},
                 {"Catmull-Rom, copy", HAIROBB_BASIS_CATMULL_ROM, HAIROBB_ON},
