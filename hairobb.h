@@ -5521,6 +5521,7 @@ typedef struct hairobb__ray_state {
     uint32_t hit_prim;
     float hit_u;
     hairobb__ray_curve hit_curve;   /* hit_prim in ray space (intersect1): for its attributes */
+    const float *hit_points;        /* its world points where they stay put (the copy, or Bezier in place); else NULL */
     /* secondary rays: hits before skip_t on the segment left and on those
        joined to its ends (positions of its first and last control point)
        are ignored; skip_t = 0 for other rays */
@@ -5581,6 +5582,7 @@ static int hairobb__ray_setup(hairobb__ray_state *rs, const hairobb_bvh *bvh, co
     rs->tfar = ray->tfar;
     rs->time = ray->time;
     rs->hit_prim = HAIROBB_INVALID_ID;
+    rs->hit_points = NULL;
     rs->hit_u = 0.0f;
     rs->skip_t = 0.0f;
     rs->dir_length = sqrtf(hairobb__dot3(ray->dir, ray->dir));
@@ -6652,7 +6654,11 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
     hairobb__v4_store(c.r, r);
     HAIROBB__COUNT(segment_passed);
     if (!hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit)) return 0;
-    if (!any_hit) rs->hit_curve = c;   /* the nearest hit so far is on this segment */
+    if (!any_hit) {   /* the nearest hit so far is on this segment */
+        rs->hit_curve = c;
+        /* kept for the hit's attributes: no lookup by prim, which misses at scale */
+        rs->hit_points = bvh->leaf_points || bvh->points_in_place ? cp : NULL;
+    }
     return 1;
 }
 
@@ -6711,11 +6717,11 @@ HAIROBB__INLINE void hairobb__bezier_v4(hairobb__v4 p0, hairobb__v4 p1, hairobb_
 
 /* Hit attributes of the hit at u, t on segment prim, c in ray space:
    computed once for the final hit, and for each one a hit filter is shown. */
-static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint32_t prim, const hairobb__ray_curve *c,
-                            float u, float t, hairobb_hit *hit)
+static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint32_t prim, const float *points,
+                            const hairobb__ray_curve *c, float u, float t, hairobb_hit *hit)
 {
     float scratch[16];
-    const float *cp = hairobb__segment_points(bvh, prim, rs->time, scratch);
+    const float *cp = points ? points : hairobb__segment_points(bvh, prim, rs->time, scratch);
     hairobb__v4 x4 = hairobb__v4_load(c->x), y4 = hairobb__v4_load(c->y), z4 = hairobb__v4_set1(0.0f), r4 = hairobb__v4_load(c->r);
     hairobb__v4 value, d1, tangent, neg_dir, n4;
     float at[4], tangent_at[4], tangent_xy[2], x, y, r, tlen2, along, n[4], nlen;
@@ -6765,7 +6771,7 @@ static int hairobb__hit_filtered_out(const hairobb__ray_state *rs, uint32_t prim
     hairobb__v4_store(c.y, hairobb__ray_row_v4(rs, 1, qx, qy, qz));
     hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));
     hairobb__v4_store(c.r, r);
-    hairobb__hit_at(rs->bvh, rs, prim, &c, u, t, &hit);
+    hairobb__hit_at(rs->bvh, rs, prim, NULL, &c, u, t, &hit);
     return !rs->hit_filter(rs->bvh->hit_filter_user, rs->ray, &hit);
 }
 
@@ -6794,7 +6800,7 @@ HAIROBB_DEF int hairobb_intersect1_from(const hairobb_bvh *bvh, const hairobb_hi
     hit->prim_id = HAIROBB_INVALID_ID;
     if (!bvh || !ray || !hairobb__ray_setup_from(&rs, bvh, from, ray)) return 0;
     if (!hairobb__trace(bvh, &rs, 0)) return 0;
-    hairobb__hit_at(bvh, &rs, rs.hit_prim, &rs.hit_curve, rs.hit_u, rs.tfar, hit);
+    hairobb__hit_at(bvh, &rs, rs.hit_prim, rs.hit_points, &rs.hit_curve, rs.hit_u, rs.tfar, hit);
     return 1;
 }
 

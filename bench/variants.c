@@ -157,7 +157,7 @@ int variant_comparable(const variant *v, scene_basis basis)
 
 /* The hairobb variant whose BVH spawns the secondary rays (and is kept for
    its row): the defaults, or on a Catmull-Rom scene the row without the
-   copy, whose 72 bytes a segment would be 11 GB at 153M segments. */
+   copy, whose 68-72 bytes a segment would be 11 GB at 153M segments. */
 int spawn_variant(const hair_scene *s)
 {
     return variant_index(s->basis == SCENE_BASIS_CATMULL_ROM ? "catmull-rom" : "default");
