@@ -267,8 +267,8 @@
                              caller's arrays (leaf entry, index, points), in
                              whatever order and pages the caller has them:
                              on 2M-10M segments of fur in a groom
-                             generator's order it traced 1.3-1.8x faster
-                             than OFF (README). OFF reads the caller's
+                             generator's order it traced 1.4-2.0x as fast
+                             as OFF (README). OFF reads the caller's
                              arrays where they are, converting other bases
                              each time a segment is read: 32-36 bytes a
                              segment (nodes and leaves), the mode for hair
