@@ -407,9 +407,10 @@
      allocator_user, verify_hair, and threads and parallel_for(_user) for
      a later hairobb_refit (a loaded BVH refits as the saved one would);
      every other setting (layout, policy, precision, curve pieces, leaf
-     size) is the saved BVH's. Curves of other bases are not saved (72
-     bytes per segment): the load converts the caller's arrays again, with
-     the build's code. A load is many times faster than a build.
+     size) is the saved BVH's, and bezier_copy is the load's own. The
+     copy is not saved: the load writes it again from the caller's arrays
+     (other bases converted with the build's code). A load is many times
+     faster than a build.
      The format: a header (magic, format version, byte-order word, node
      width, the build's options, counts, a 64-bit hash of the Bezier
      segments traced), the node memory, the leaves' segment ids (and the u
@@ -433,7 +434,8 @@
      cycles, sharing or overlap, no byte unreached), no deeper than the
      traversal stack holds, inner nodes of 2 to W children (empty lanes
      last), leaves of 1 to max_leaf_size segments taking the ids in tree
-     order, each id below segment_count. Anything wrong is
+     order, each id below segment_count, every segment named by some
+     leaf. Anything wrong is
      HAIROBB_ERROR_INVALID_FILE, with nothing allocated left behind. The
      floats of nodes are not checked: a NaN or infinite box only makes
      rays miss children or visit more of them (hits come from the
@@ -4458,8 +4460,8 @@ static void hairobb__copy_task(void *context, unsigned index)
    bases converted as the build read them: the same floats), so that a
    leaf's segments lie on consecutive 64-byte lines, and point_refs.
    hairobb_refit writes the points again into the same memory. Every
-   segment has a reference in a built tree; a loaded tree without one for
-   some segment is INVALID_FILE. On the BVH's threads (or parallel_for):
+   segment has a reference in a built tree, and the loader checks a saved
+   one for that. On the BVH's threads (or parallel_for):
    the caller's arrays are read in no order of memory. */
 static hairobb_result hairobb__copy_points(hairobb_bvh *bvh)
 {
@@ -5316,6 +5318,7 @@ static hairobb_result hairobb__load_tree(hairobb_bvh *bvh, const unsigned char *
     void *user = bvh->allocator_user;
     hairobb__tree_check check;
     hairobb_result result = HAIROBB_ERROR_OUT_OF_MEMORY;
+    unsigned char *named = NULL;
     size_t i;
     memset(&check, 0, sizeof check);
     if (saved->node_bytes) {
@@ -5340,13 +5343,20 @@ static hairobb_result hairobb__load_tree(hairobb_bvh *bvh, const unsigned char *
         if (!bvh->leaf_ranges) goto done;
         memcpy(bvh->leaf_ranges, in + HAIROBB__SAVE_HEADER + bvh->node_bytes + saved->leaf_bytes, saved->range_bytes);
     }
+    /* every segment named by some leaf, as in every built tree (the copy reads each one's points from one) */
+    named = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(segment_count / 8 + 1, user));
+    if (!named) goto done;
+    memset(named, 0, segment_count / 8 + 1);
     result = HAIROBB_ERROR_INVALID_FILE;
     for (i = 0; i < bvh->leaf_prim_count; ++i) {
         if (bvh->leaf_prims[i] >= segment_count) goto done;
+        named[bvh->leaf_prims[i] >> 3] |= (unsigned char)(1u << (bvh->leaf_prims[i] & 7u));
         if (bvh->leaf_ranges && !(bvh->leaf_ranges[2 * i] >= 0.0f && bvh->leaf_ranges[2 * i] <= bvh->leaf_ranges[2 * i + 1] &&
                                   bvh->leaf_ranges[2 * i + 1] <= 1.0f))
             goto done;
     }
+    for (i = 0; i < segment_count; ++i)
+        if (!(named[i >> 3] >> (i & 7u) & 1u)) goto done;
     check.nodes = bvh->nodes;
     check.node_bytes = bvh->node_bytes;
     check.leaf_prim_count = bvh->leaf_prim_count;
@@ -5359,6 +5369,7 @@ static hairobb_result hairobb__load_tree(hairobb_bvh *bvh, const unsigned char *
     }
 done:
     if (check.reached) HAIROBB_FREE(check.reached, user);
+    if (named) HAIROBB_FREE(named, user);
     return result;
 }
 

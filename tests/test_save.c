@@ -701,6 +701,11 @@ static void structural_lies(void)
     l.leaves[l.leaf_count - 1] = 0;
     expect_invalid("a leaf_prims entry no leaf names", &h, &l, model);
     lie_reset(&l, &h);
+    if (l.leaves[0] != l.leaves[1]) {
+        l.leaves[0] = l.leaves[1];   /* one segment twice, another nowhere */
+        expect_invalid("a segment no leaf names", &h, &l, model);
+    }
+    lie_reset(&l, &h);
     l.node_bytes += 16;
     memset(l.nodes + l.node_bytes - 16, 0, 16);
     expect_invalid("16 bytes of node memory no reference reaches", &h, &l, model);
