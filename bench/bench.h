@@ -157,6 +157,9 @@ extern const variant all_variants[];
 
 /* The baseline of every ratio */
 #define BASELINE_KEY "embree-r4"
+/* hairobb without the copy against its peer in memory, Embree's compact mode */
+#define COMPACT_KEY "no-copy"
+#define COMPACT_PEER_KEY "embree-compact"
 
 /* ======================================================================== */
 /* Memory                                                                   */
@@ -250,6 +253,7 @@ typedef struct variant_result {
        each round; NAN when not measured */
     spread mrays[RAY_KIND_COUNT][MAX_THREAD_COUNTS];
     spread ratio[RAY_KIND_COUNT][MAX_THREAD_COUNTS];
+    spread peer_ratio[RAY_KIND_COUNT][MAX_THREAD_COUNTS]; /* COMPACT_KEY only: to COMPACT_PEER_KEY, within rounds */
     int has_accuracy;
     accuracy_summary accuracy;
     rss_step build_rss;    /* the process's resident memory over the build */

@@ -204,7 +204,7 @@ const char *spread_cell(char *cell, size_t size, spread x)
 void time_in_rounds(const options *o, workload *w, built_accel accel[VARIANT_COUNT], scene_result *sr)
 {
     static double mrays[VARIANT_COUNT][MAX_ROUNDS];
-    int base = variant_index(BASELINE_KEY);
+    int base = variant_index(BASELINE_KEY), compact = variant_index(COMPACT_KEY), peer = variant_index(COMPACT_PEER_KEY);
     for (int k = 0; k < RAY_KIND_COUNT; k++) {
         const ray_set *rays = &w->rays[k];
         if (!o->ray_kind_enabled[k] || rays->count == 0)
@@ -232,6 +232,12 @@ void time_in_rounds(const options *o, workload *w, built_accel accel[VARIANT_COU
                     ratios[round] = sr->variants[base].measured ? mrays[i][round] / mrays[base][round] : NAN;
                 r->ratio[k][t] = spread_of(ratios, sr->variants[base].measured ? o->rounds : 0);
                 r->mrays[k][t] = spread_of(mrays[i], o->rounds);
+            }
+            if (sr->variants[compact].measured && sr->variants[peer].measured) {
+                double ratios[MAX_ROUNDS];
+                for (int round = 0; round < o->rounds; round++)
+                    ratios[round] = mrays[compact][round] / mrays[peer][round];
+                sr->variants[compact].peer_ratio[k][t] = spread_of(ratios, o->rounds);
             }
         }
     }

@@ -275,6 +275,24 @@ void print_speed_table(const options *o, const scene_result *sr, const int selec
             printf("\n");
         }
     }
+    /* the compact modes, each against the other, within rounds */
+    const variant_result *compact = &sr->variants[variant_index(COMPACT_KEY)];
+    const variant_result *peer = &sr->variants[variant_index(COMPACT_PEER_KEY)];
+    if (selected[variant_index(COMPACT_KEY)] && compact->measured && selected[variant_index(COMPACT_PEER_KEY)] && peer->measured) {
+        printf("\n%s / %s (peers in memory), the ratio taken within each round: median [min-max]\n",
+               all_variants[variant_index(COMPACT_KEY)].label, all_variants[variant_index(COMPACT_PEER_KEY)].label);
+        printf("%-21s", "variant");
+        for (int k = 0; k < RAY_KIND_COUNT; k++)
+            for (int t = 0; t < o->thread_count_count && o->ray_kind_enabled[k]; t++) {
+                snprintf(heading, sizeof heading, "%s %ut", ray_kind_names[k], o->thread_counts[t]);
+                printf(" %-17s", heading);
+            }
+        printf("\n%-21s", all_variants[variant_index(COMPACT_KEY)].label);
+        for (int k = 0; k < RAY_KIND_COUNT; k++)
+            for (int t = 0; t < o->thread_count_count && o->ray_kind_enabled[k]; t++)
+                printf(" %-17s", spread_cell(cell, sizeof cell, compact->peer_ratio[k][t]));
+        printf("\n");
+    }
 }
 
 void print_accuracy_table(const workload *w, const scene_result *sr, const int selected[VARIANT_COUNT])

@@ -261,7 +261,7 @@ int build_and_record(workload *w, const variant *v, built_accel *accel, variant_
 {
     for (int k = 0; k < RAY_KIND_COUNT; k++)
         for (int t = 0; t < MAX_THREAD_COUNTS; t++)
-            r->mrays[k][t] = r->ratio[k][t] = (spread){NAN, NAN, NAN};
+            r->mrays[k][t] = r->ratio[k][t] = r->peer_ratio[k][t] = (spread){NAN, NAN, NAN};
     progress_start("  %s: build", v->label);
     int adopted = w->default_bvh && v == &all_variants[spawn_variant(&w->scene)];
     if (!adopted && !memory_fits(estimated_build_bytes(v, &w->scene), "the build", r->skipped, sizeof r->skipped)) {
