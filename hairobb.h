@@ -864,22 +864,128 @@ HAIROBB_DEF void hairobb_hair_free(hairobb_hair *hair);
                                 HAIROBB__SSE41 ? HAIROBB_SIMD_SSE41 : HAIROBB__SSE ? HAIROBB_SIMD_SSE2 : HAIROBB_SIMD_NONE)
 /* Runtime dispatch: where the baseline lacks AVX2, gcc and clang compile the
    kernels a second time for AVX2 (target pragmas; their intrinsics need no
-   -m flag) and each BVH picks the path its CPU runs. */
-#if HAIROBB__SSE && !HAIROBB__AVX2 && !defined(HAIROBB_NO_DISPATCH) && (defined(__x86_64__) || defined(__i386__)) && \
-    ((defined(__clang__) && __clang_major__ >= 4) || (!defined(__clang__) && defined(__GNUC__) && __GNUC__ >= 5))
+   -m flag), MSVC likewise (its intrinsics need no flag or pragma), and each
+   BVH picks the path its CPU runs. */
+#if HAIROBB__SSE && !HAIROBB__AVX2 && !defined(HAIROBB_NO_DISPATCH) && \
+    (((defined(__x86_64__) || defined(__i386__)) && \
+      ((defined(__clang__) && __clang_major__ >= 4) || (!defined(__clang__) && defined(__GNUC__) && __GNUC__ >= 5))) || \
+     (defined(_MSC_VER) && !defined(__clang__) && defined(_M_X64)))
 #define HAIROBB__DISPATCH 1
 #include <immintrin.h>
 #else
 #define HAIROBB__DISPATCH 0
 #endif
 
-/* The build uses POSIX threads where there are any (HAIROBB_NO_THREADS: never). */
-#if !defined(HAIROBB_NO_THREADS) && (defined(__unix__) || defined(__APPLE__))
+/* The build's threads (HAIROBB_NO_THREADS: none): Win32's on Windows
+   (Vista and later: slim reader/writer locks and condition variables),
+   POSIX threads on other systems that have them. Each has the same few
+   calls below: a lock, condition variables, threads started and joined,
+   the number of cores. */
+#if !defined(HAIROBB_NO_THREADS) && defined(_WIN32)
+#ifndef WIN32_LEAN_AND_MEAN
+#define WIN32_LEAN_AND_MEAN
+#define HAIROBB__LEAN_DEFINED
+#endif
+#ifndef NOMINMAX
+#define NOMINMAX   /* no min and max macros from windows.h */
+#define HAIROBB__NOMINMAX_DEFINED
+#endif
+#include <windows.h>
+#ifdef HAIROBB__LEAN_DEFINED
+#undef WIN32_LEAN_AND_MEAN
+#undef HAIROBB__LEAN_DEFINED
+#endif
+#ifdef HAIROBB__NOMINMAX_DEFINED
+#undef NOMINMAX
+#undef HAIROBB__NOMINMAX_DEFINED
+#endif
+#define HAIROBB__THREADS 1
+typedef SRWLOCK hairobb__mutex;
+typedef CONDITION_VARIABLE hairobb__cond;
+typedef HANDLE hairobb__thread;
+#define HAIROBB__THREAD_FN(name, arg) static DWORD WINAPI name(LPVOID arg)
+#define HAIROBB__THREAD_END return 0
+static int hairobb__mutex_init(hairobb__mutex *m) { InitializeSRWLock(m); return 0; }
+static void hairobb__mutex_destroy(hairobb__mutex *m) { (void)m; }
+static void hairobb__mutex_lock(hairobb__mutex *m) { AcquireSRWLockExclusive(m); }
+static void hairobb__mutex_unlock(hairobb__mutex *m) { ReleaseSRWLockExclusive(m); }
+static int hairobb__cond_init(hairobb__cond *c) { InitializeConditionVariable(c); return 0; }
+static void hairobb__cond_destroy(hairobb__cond *c) { (void)c; }
+static void hairobb__cond_wait(hairobb__cond *c, hairobb__mutex *m) { SleepConditionVariableSRW(c, m, INFINITE, 0); }
+static void hairobb__cond_signal(hairobb__cond *c) { WakeConditionVariable(c); }
+static void hairobb__cond_broadcast(hairobb__cond *c) { WakeAllConditionVariable(c); }
+static int hairobb__thread_start(hairobb__thread *t, LPTHREAD_START_ROUTINE fn, void *arg)
+{
+    *t = CreateThread(NULL, 0, fn, arg, 0, NULL);
+    return *t ? 0 : -1;
+}
+static void hairobb__thread_join(hairobb__thread t)
+{
+    WaitForSingleObject(t, INFINITE);
+    CloseHandle(t);
+}
+/* logical processors of the calling thread's processor group (at most 64) */
+static long hairobb__core_count(void)
+{
+    SYSTEM_INFO info;
+    GetSystemInfo(&info);
+    return (long)info.dwNumberOfProcessors;
+}
+#elif !defined(HAIROBB_NO_THREADS) && (defined(__unix__) || defined(__APPLE__))
 #include <pthread.h>
 #include <unistd.h>
 #define HAIROBB__THREADS 1
+typedef pthread_mutex_t hairobb__mutex;
+typedef pthread_cond_t hairobb__cond;
+typedef pthread_t hairobb__thread;
+#define HAIROBB__THREAD_FN(name, arg) static void *name(void *arg)
+#define HAIROBB__THREAD_END return NULL
+static int hairobb__mutex_init(hairobb__mutex *m) { return pthread_mutex_init(m, NULL); }
+static void hairobb__mutex_destroy(hairobb__mutex *m) { pthread_mutex_destroy(m); }
+static void hairobb__mutex_lock(hairobb__mutex *m) { pthread_mutex_lock(m); }
+static void hairobb__mutex_unlock(hairobb__mutex *m) { pthread_mutex_unlock(m); }
+static int hairobb__cond_init(hairobb__cond *c) { return pthread_cond_init(c, NULL); }
+static void hairobb__cond_destroy(hairobb__cond *c) { pthread_cond_destroy(c); }
+static void hairobb__cond_wait(hairobb__cond *c, hairobb__mutex *m) { pthread_cond_wait(c, m); }
+static void hairobb__cond_signal(hairobb__cond *c) { pthread_cond_signal(c); }
+static void hairobb__cond_broadcast(hairobb__cond *c) { pthread_cond_broadcast(c); }
+static int hairobb__thread_start(hairobb__thread *t, void *(*fn)(void *), void *arg) { return pthread_create(t, NULL, fn, arg); }
+static void hairobb__thread_join(hairobb__thread t) { pthread_join(t, NULL); }
+static long hairobb__core_count(void) { return sysconf(_SC_NPROCESSORS_ONLN); }
 #else
 #define HAIROBB__THREADS 0
+#endif
+
+/* Compiler spellings, in one place: gcc and clang (and clang-cl), MSVC,
+   and plain C for any other compiler (correct, slower). Helpers the
+   kernels call are always inlined: inside the AVX2 copy they are then
+   compiled for AVX2 too. A call from AVX2 code into SSE code (without the
+   VEX encoding) made the pieces intersector and the shared-rotation nodes
+   2x slower (bench, AMD EPYC). HAIROBB__NOINLINE and HAIROBB__COLD open a
+   declaration; HAIROBB__PREFETCH is only a hint. */
+#if defined(__GNUC__) || defined(__clang__)
+#define HAIROBB__INLINE static inline __attribute__((always_inline))
+#define HAIROBB__NOINLINE __attribute__((noinline))
+#define HAIROBB__COLD __attribute__((noinline, cold))
+#define HAIROBB__LIKELY(x) __builtin_expect(!!(x), 1)
+#define HAIROBB__PREFETCH(address) __builtin_prefetch(address)
+#elif defined(_MSC_VER)
+#include <intrin.h>
+#define HAIROBB__INLINE static __forceinline
+#define HAIROBB__NOINLINE __declspec(noinline)
+#define HAIROBB__COLD __declspec(noinline)
+#define HAIROBB__LIKELY(x) (x)
+#if HAIROBB__SSE
+#define HAIROBB__PREFETCH(address) _mm_prefetch((const char *)(address), _MM_HINT_T0)
+#endif
+#else
+#define HAIROBB__INLINE static inline
+#define HAIROBB__NOINLINE
+#define HAIROBB__COLD
+#define HAIROBB__LIKELY(x) (x)
+#endif
+#ifndef HAIROBB__PREFETCH
+#define HAIROBB__PREFETCH(address) ((void)(address))
 #endif
 
 #ifdef __cplusplus
@@ -999,17 +1105,6 @@ static void *hairobb__malloc_large(size_t bytes, void *user)
 /* ------------------------------------------------------------------------ */
 /* >>vector  Small vector helpers                                           */
 /* ------------------------------------------------------------------------ */
-/* Helpers the kernels call are always inlined: inside the AVX2 copy they are
-   then compiled for AVX2 too. A call from AVX2 code into SSE code (without
-   the VEX encoding) made the pieces intersector and the shared-rotation
-   nodes 2x slower (bench, AMD EPYC). */
-#if defined(__GNUC__) || defined(__clang__)
-#define HAIROBB__INLINE static inline __attribute__((always_inline))
-#define HAIROBB__LIKELY(x) __builtin_expect(!!(x), 1)
-#else
-#define HAIROBB__INLINE static inline
-#define HAIROBB__LIKELY(x) (x)
-#endif
 HAIROBB__INLINE float hairobb__minf(float a, float b) { return a < b ? a : b; }
 HAIROBB__INLINE float hairobb__maxf(float a, float b) { return a > b ? a : b; }
 HAIROBB__INLINE float hairobb__dot3(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
@@ -1090,6 +1185,10 @@ HAIROBB__INLINE int hairobb__lowest_bit(unsigned bits)
 {
 #if defined(__GNUC__) || defined(__clang__)
     return __builtin_ctz(bits);
+#elif defined(_MSC_VER)
+    unsigned long index;
+    _BitScanForward(&index, bits);
+    return (int)index;
 #else
     int i = 0;
     while (!(bits & 1u)) { bits >>= 1; ++i; }
@@ -1216,7 +1315,19 @@ HAIROBB_DEF const char *hairobb_simd_string(hairobb_simd simd)
 static hairobb_result hairobb__choose_simd(hairobb_simd requested, hairobb_simd *chosen)
 {
     int avx2 = 0;
-#if HAIROBB__DISPATCH
+#if HAIROBB__DISPATCH && defined(_MSC_VER) && !defined(__clang__)
+    /* AVX2 (leaf 7), and the operating system saving the YMM registers:
+       OSXSAVE and AVX (leaf 1), XMM and YMM state enabled in XCR0 */
+    int info[4];
+    __cpuid(info, 0);
+    if (info[0] >= 7) {
+        __cpuid(info, 1);
+        if ((info[2] & (1 << 27)) && (info[2] & (1 << 28)) && (_xgetbv(0) & 6u) == 6u) {
+            __cpuidex(info, 7, 0);
+            avx2 = (info[1] & (1 << 5)) != 0;
+        }
+    }
+#elif HAIROBB__DISPATCH
     __builtin_cpu_init();
     avx2 = __builtin_cpu_supports("avx2") != 0;
 #endif
@@ -1744,6 +1855,22 @@ failed:
 }
 
 #ifndef HAIROBB_NO_STDIO
+/* A file's length in bytes, the file left at its start; 0 where it cannot
+   be told. Windows' long has 32 bits: its 64-bit calls there, so that
+   files past 2 GB load. */
+static int hairobb__file_length(FILE *file, uint64_t *length)
+{
+#if defined(_WIN32)
+    __int64 end;
+    if (_fseeki64(file, 0, SEEK_END) != 0 || (end = _ftelli64(file)) < 0 || _fseeki64(file, 0, SEEK_SET) != 0) return 0;
+#else
+    long end;
+    if (fseek(file, 0, SEEK_END) != 0 || (end = ftell(file)) < 0 || fseek(file, 0, SEEK_SET) != 0) return 0;
+#endif
+    *length = (uint64_t)end;
+    return 1;
+}
+
 /* The header first, so that a file of another size is an error before
    anything of its announced size is allocated. */
 HAIROBB_DEF hairobb_result hairobb_hair_load(const char *path, void *allocator_user, hairobb_hair *hair)
@@ -1752,7 +1879,7 @@ HAIROBB_DEF hairobb_result hairobb_hair_load(const char *path, void *allocator_u
     hairobb__hair_layout l;
     hairobb_result result;
     FILE *file;
-    long length;
+    uint64_t length;
     if (!hair) return HAIROBB_ERROR_INVALID_ARGUMENT;
     memset(hair, 0, sizeof *hair);
     if (!path) return HAIROBB_ERROR_INVALID_ARGUMENT;
@@ -1762,9 +1889,9 @@ HAIROBB_DEF hairobb_result hairobb_hair_load(const char *path, void *allocator_u
         result = ferror(file) ? HAIROBB_ERROR_IO : HAIROBB_ERROR_INVALID_FILE;   /* a directory, or too short */
     else
         result = hairobb__hair_layout_of(header, &l);
-    if (result == HAIROBB_OK && (fseek(file, 0, SEEK_END) != 0 || (length = ftell(file)) < 0 || fseek(file, 0, SEEK_SET) != 0))
+    if (result == HAIROBB_OK && !hairobb__file_length(file, &length))
         result = HAIROBB_ERROR_IO;
-    else if (result == HAIROBB_OK && (uint64_t)length != l.size)
+    else if (result == HAIROBB_OK && length != l.size)
         result = HAIROBB_ERROR_INVALID_FILE;
     else if (result == HAIROBB_OK && l.size > (uint64_t)((size_t)-1))
         result = HAIROBB_ERROR_TOO_LARGE;
@@ -1911,12 +2038,8 @@ HAIROBB__INLINE const float *hairobb__builder_points(const hairobb__builder *b, 
 #define HAIROBB__AHEAD 8
 HAIROBB__INLINE void hairobb__prefetch_points(const hairobb__builder *b, size_t i, size_t end)
 {
-#if defined(__GNUC__) || defined(__clang__)
-    if (i + 2 * HAIROBB__AHEAD < end) __builtin_prefetch(b->indices + b->ids[i + 2 * HAIROBB__AHEAD]);
-    if (i + HAIROBB__AHEAD < end) __builtin_prefetch(b->vertices + 4 * (size_t)b->indices[b->ids[i + HAIROBB__AHEAD]]);
-#else
-    (void)b; (void)i; (void)end;
-#endif
+    if (i + 2 * HAIROBB__AHEAD < end) HAIROBB__PREFETCH(b->indices + b->ids[i + 2 * HAIROBB__AHEAD]);
+    if (i + HAIROBB__AHEAD < end) HAIROBB__PREFETCH(b->vertices + 4 * (size_t)b->indices[b->ids[i + HAIROBB__AHEAD]]);
 }
 
 /* Control points of the reference at position i: the caller's, or its
@@ -3269,13 +3392,13 @@ static void hairobb__node_box_ends(const hairobb__builder *b, const hairobb__ran
 {
     unsigned last = b->time_steps - 1, n, step;
     double line_lower[2][3], line_upper[2][3], out_lower[3] = {0.0, 0.0, 0.0}, out_upper[3] = {0.0, 0.0, 0.0};
-    float norms[3], far = 0.0f;
+    float norms[3], farthest = 0.0f;
     hairobb__frame_prep prep;
     int k, e;
     hairobb__prepare_frame(frame, &prep);
     for (k = 0; k < 3; ++k) {   /* rounded up: the radius must not shrink */
         norms[k] = sqrtf(hairobb__dot3(frame + 3 * k, frame + 3 * k)) * (1.0f + 1.0f / 1048576.0f);
-        far = hairobb__maxf(far, fabsf(centre[k]));
+        farthest = hairobb__maxf(farthest, fabsf(centre[k]));
     }
     for (n = 0; n <= last; ++n) {   /* the two ends first, then the steps between */
         hairobb__b4 box_lower = hairobb__b4_set1(FLT_MAX), box_upper = hairobb__b4_set1(-FLT_MAX);
@@ -3313,7 +3436,7 @@ static void hairobb__node_box_ends(const hairobb__builder *b, const hairobb__ran
             if ((double)upper[e][k] < h) upper[e][k] = nextafterf(upper[e][k], FLT_MAX);
             mag = hairobb__maxf(mag, hairobb__maxf(hairobb__maxf(fabsf(lower[e][k]), fabsf(upper[e][k])), upper[e][k] - lower[e][k]));
         }
-        pad = (mag + 2.0f * norms[k] * far) * (1.0f / 2097152.0f) + 1e-30f;   /* 2^-21 relative */
+        pad = (mag + 2.0f * norms[k] * farthest) * (1.0f / 2097152.0f) + 1e-30f;   /* 2^-21 relative */
         for (e = 0; e < 2; ++e) {
             lower[e][k] -= pad;
             upper[e][k] += pad;
@@ -3762,10 +3885,10 @@ typedef struct hairobb__pool {
     void *job_context;
     size_t job_parts, job_next, job_left;
 #if HAIROBB__THREADS
-    pthread_mutex_t lock;
-    pthread_cond_t added;             /* a task or a part came, the adding ended, or a stop */
-    pthread_cond_t job_done;          /* the last part of the job ended */
-    pthread_t workers[255];
+    hairobb__mutex lock;
+    hairobb__cond added;              /* a task or a part came, the adding ended, or a stop */
+    hairobb__cond job_done;           /* the last part of the job ended */
+    hairobb__thread workers[255];
     unsigned started;
 #endif
 } hairobb__pool;
@@ -3774,7 +3897,7 @@ static void hairobb__pool_lock(hairobb__pool *pool, int lock)
 {
 #if HAIROBB__THREADS
     if (!pool->locking) return;
-    if (lock) pthread_mutex_lock(&pool->lock); else pthread_mutex_unlock(&pool->lock);
+    if (lock) hairobb__mutex_lock(&pool->lock); else hairobb__mutex_unlock(&pool->lock);
 #else
     (void)pool; (void)lock;
 #endif
@@ -3785,7 +3908,7 @@ static void hairobb__pool_publish(hairobb__pool *pool, size_t task_count)
 {
     pool->task_count = task_count;
 #if HAIROBB__THREADS
-    if (pool->locking) pthread_cond_signal(&pool->added);
+    if (pool->locking) hairobb__cond_signal(&pool->added);
 #endif
 }
 
@@ -3801,7 +3924,7 @@ static void hairobb__work(hairobb__pool *pool, int calling_thread)
         hairobb__pool_lock(pool, 1);
 #if HAIROBB__THREADS
         while (pool->adding && !pool->stop && pool->next_task >= pool->task_count && !(pool->job && pool->job_next < pool->job_parts))
-            pthread_cond_wait(&pool->added, &pool->lock);
+            hairobb__cond_wait(&pool->added, &pool->lock);
         if (pool->job && pool->job_next < pool->job_parts) {
             hairobb_task_fn job = pool->job;
             void *job_context = pool->job_context;
@@ -3809,7 +3932,7 @@ static void hairobb__work(hairobb__pool *pool, int calling_thread)
             hairobb__pool_lock(pool, 0);
             job(job_context, part);
             hairobb__pool_lock(pool, 1);
-            if (--pool->job_left == 0) pthread_cond_signal(&pool->job_done);
+            if (--pool->job_left == 0) hairobb__cond_signal(&pool->job_done);
             hairobb__pool_lock(pool, 0);
             continue;
         }
@@ -3842,10 +3965,10 @@ static void hairobb__work(hairobb__pool *pool, int calling_thread)
 }
 
 #if HAIROBB__THREADS
-static void *hairobb__worker(void *pool)
+HAIROBB__THREAD_FN(hairobb__worker, pool)
 {
     hairobb__work(HAIROBB__CAST(hairobb__pool *, pool), 0);
-    return NULL;
+    HAIROBB__THREAD_END;
 }
 #endif
 
@@ -3855,23 +3978,23 @@ static void hairobb__pool_start(hairobb__pool *pool, unsigned threads, size_t mo
 {
 #if HAIROBB__THREADS
     if (threads == 0) {
-        long cores = sysconf(_SC_NPROCESSORS_ONLN);
+        long cores = hairobb__core_count();
         threads = cores < 1 ? 1u : cores > 256 ? 256u : (unsigned)cores;
     }
     if (threads > most_tasks) threads = most_tasks ? (unsigned)most_tasks : 1u;
-    if (threads < 2 || pthread_mutex_init(&pool->lock, NULL) != 0) return;
-    if (pthread_cond_init(&pool->added, NULL) != 0) {
-        pthread_mutex_destroy(&pool->lock);
+    if (threads < 2 || hairobb__mutex_init(&pool->lock) != 0) return;
+    if (hairobb__cond_init(&pool->added) != 0) {
+        hairobb__mutex_destroy(&pool->lock);
         return;
     }
-    if (pthread_cond_init(&pool->job_done, NULL) != 0) {
-        pthread_cond_destroy(&pool->added);
-        pthread_mutex_destroy(&pool->lock);
+    if (hairobb__cond_init(&pool->job_done) != 0) {
+        hairobb__cond_destroy(&pool->added);
+        hairobb__mutex_destroy(&pool->lock);
         return;
     }
     pool->locking = 1;
     /* fewer threads than asked, if some would not start */
-    while (pool->started < threads - 1 && pthread_create(&pool->workers[pool->started], NULL, hairobb__worker, pool) == 0)
+    while (pool->started < threads - 1 && hairobb__thread_start(&pool->workers[pool->started], hairobb__worker, pool) == 0)
         ++pool->started;
 #else
     (void)pool; (void)threads; (void)most_tasks;
@@ -3886,14 +4009,14 @@ static void hairobb__pool_finish(hairobb__pool *pool)
     unsigned i;
     hairobb__pool_lock(pool, 1);
     pool->adding = 0;
-    if (pool->locking) pthread_cond_broadcast(&pool->added);
+    if (pool->locking) hairobb__cond_broadcast(&pool->added);
     hairobb__pool_lock(pool, 0);
     hairobb__work(pool, 1);
-    for (i = 0; i < pool->started; ++i) pthread_join(pool->workers[i], NULL);
+    for (i = 0; i < pool->started; ++i) hairobb__thread_join(pool->workers[i]);
     if (pool->locking) {
-        pthread_cond_destroy(&pool->job_done);
-        pthread_cond_destroy(&pool->added);
-        pthread_mutex_destroy(&pool->lock);
+        hairobb__cond_destroy(&pool->job_done);
+        hairobb__cond_destroy(&pool->added);
+        hairobb__mutex_destroy(&pool->lock);
     }
     pool->locking = 0;
     pool->started = 0;
@@ -3978,23 +4101,23 @@ static void hairobb__top_parts(const hairobb__builder *b, size_t parts, hairobb_
     size_t k;
 #if HAIROBB__THREADS
     if (pool && pool->locking && parts > 1) {
-        pthread_mutex_lock(&pool->lock);
+        hairobb__mutex_lock(&pool->lock);
         pool->job = run;
         pool->job_context = context;
         pool->job_parts = parts;
         pool->job_next = 0;
         pool->job_left = parts;
-        pthread_cond_broadcast(&pool->added);
+        hairobb__cond_broadcast(&pool->added);
         while (pool->job_next < pool->job_parts) {
             k = pool->job_next++;
-            pthread_mutex_unlock(&pool->lock);
+            hairobb__mutex_unlock(&pool->lock);
             run(context, (unsigned)k);
-            pthread_mutex_lock(&pool->lock);
+            hairobb__mutex_lock(&pool->lock);
             --pool->job_left;
         }
-        while (pool->job_left) pthread_cond_wait(&pool->job_done, &pool->lock);
+        while (pool->job_left) hairobb__cond_wait(&pool->job_done, &pool->lock);
         pool->job = NULL;
-        pthread_mutex_unlock(&pool->lock);
+        hairobb__mutex_unlock(&pool->lock);
         return;
     }
 #else
@@ -5463,26 +5586,26 @@ HAIROBB_DEF hairobb_result hairobb_load_file(const char *path,
     unsigned char header[HAIROBB__SAVE_HEADER], *data;
     hairobb_result result = HAIROBB_OK;
     FILE *file;
-    long length = 0;
+    uint64_t length = 0;
     if (out) *out = NULL;
     if (!path || !out) return HAIROBB_ERROR_INVALID_ARGUMENT;
     file = fopen(path, "rb");
     if (!file) return HAIROBB_ERROR_IO;
     if (fread(header, 1, sizeof header, file) != sizeof header)
         result = ferror(file) ? HAIROBB_ERROR_IO : HAIROBB_ERROR_INVALID_FILE;   /* a directory, or too short */
-    else if (fseek(file, 0, SEEK_END) != 0 || (length = ftell(file)) < 0 || fseek(file, 0, SEEK_SET) != 0)
+    else if (!hairobb__file_length(file, &length))
         result = HAIROBB_ERROR_IO;
     else if (memcmp(header, hairobb__save_magic, sizeof hairobb__save_magic) == 0 &&
              hairobb__get32(header + HAIROBB__AT_VERSION) == HAIROBB__SAVE_VERSION &&
              hairobb__get32(header + HAIROBB__AT_BYTE_ORDER) == HAIROBB__SAVE_BYTE_ORDER &&
              hairobb__get32(header + HAIROBB__AT_WIDTH) == HAIROBB__W &&
-             (hairobb__get64(header + HAIROBB__AT_NODE_BYTES) > (uint64_t)length ||
-              hairobb__get64(header + HAIROBB__AT_LEAF_PRIMS) > (uint64_t)length / sizeof(uint32_t) ||
+             (hairobb__get64(header + HAIROBB__AT_NODE_BYTES) > length ||
+              hairobb__get64(header + HAIROBB__AT_LEAF_PRIMS) > length / sizeof(uint32_t) ||
               HAIROBB__SAVE_HEADER + hairobb__get64(header + HAIROBB__AT_NODE_BYTES) +
                       ((sizeof(uint32_t) * hairobb__get64(header + HAIROBB__AT_LEAF_PRIMS) + 7) & ~(uint64_t)7) + 8 !=
                   (uint64_t)length))
         result = HAIROBB_ERROR_INVALID_FILE;   /* sizes that disagree with the file's: before any large allocation */
-    else if ((unsigned long)length > (size_t)-1)
+    else if (length > (uint64_t)((size_t)-1))
         result = HAIROBB_ERROR_TOO_LARGE;
     if (result == HAIROBB_OK) {
         data = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC((size_t)length, user));
@@ -5558,8 +5681,8 @@ HAIROBB__INLINE void hairobb__slab_setup(hairobb__slab_ray *slab, const float or
     float rdir[4];
     __m128 d = _mm_setr_ps(dir[0], dir[1], dir[2], 1.0f), sign_bit = _mm_set1_ps(-0.0f);
     __m128 tiny = _mm_set1_ps(HAIROBB__TINY_DIR);
-    __m128 small = _mm_cmplt_ps(_mm_andnot_ps(sign_bit, d), tiny);
-    d = _mm_or_ps(_mm_andnot_ps(small, d), _mm_and_ps(small, _mm_or_ps(_mm_and_ps(d, sign_bit), tiny)));
+    __m128 tiny_lanes = _mm_cmplt_ps(_mm_andnot_ps(sign_bit, d), tiny);
+    d = _mm_or_ps(_mm_andnot_ps(tiny_lanes, d), _mm_and_ps(tiny_lanes, _mm_or_ps(_mm_and_ps(d, sign_bit), tiny)));
     d = _mm_div_ps(_mm_set1_ps(1.0f), d);
     _mm_storeu_ps(rdir, d);
     upper_first = _mm_movemask_ps(d);
@@ -5948,11 +6071,7 @@ HAIROBB__INLINE void hairobb__converted_points(const hairobb_bvh *bvh, const flo
    leaf's), compiled with each pass of the kernels: AVX2 code calling SSE
    code was 2x slower (see tests/check_dispatch_calls.sh). No FMA in any
    pass, so they round alike. */
-static const float *hairobb__made_moving(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
-#if defined(__GNUC__) || defined(__clang__)
-    __attribute__((noinline))
-#endif
-    ;
+HAIROBB__NOINLINE static const float *hairobb__made_moving(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16]);
 static const float *hairobb__made_moving(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
 {
     size_t at = 4 * (size_t)bvh->indices[prim];
@@ -6327,10 +6446,7 @@ static float hairobb__ribbon_f(const hairobb__ray_poly *c, float u, float *deriv
    radius r and t is in [tnear, tfar]: the nearest hit so far. Of two
    segments hit at the same t the smaller index wins, whatever the tree. */
 /* out of line: accept stays small where no filter is set */
-#if defined(__GNUC__) || defined(__clang__)
-static int hairobb__hit_filtered_out(const hairobb__ray_state *rs, uint32_t prim, float u, float t) __attribute__((noinline, cold));
-#endif
-static int hairobb__hit_filtered_out(const hairobb__ray_state *rs, uint32_t prim, float u, float t);
+HAIROBB__COLD static int hairobb__hit_filtered_out(const hairobb__ray_state *rs, uint32_t prim, float u, float t);
 
 static int hairobb__accept(hairobb__ray_state *rs, uint32_t prim, float u, float t, float x, float y, float r)
 {
@@ -6790,8 +6906,10 @@ static int hairobb__hit_filtered_out(const hairobb__ray_state *rs, uint32_t prim
 /* ------------------------------------------------------------------------ */
 /* >>tracing_api  Tracing API                                               */
 /* ------------------------------------------------------------------------ */
-#if HAIROBB__DISPATCH
+#if HAIROBB__DISPATCH && (defined(__GNUC__) || defined(__clang__))
 static int hairobb__traverse_avx2(const hairobb_bvh *bvh, hairobb__ray_state *rs, int any_hit) __attribute__((target("avx2")));
+#elif HAIROBB__DISPATCH
+static int hairobb__traverse_avx2(const hairobb_bvh *bvh, hairobb__ray_state *rs, int any_hit);
 #endif
 
 /* The traversal of the BVH's path (every path gives the same answers). */
@@ -6921,7 +7039,7 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define HAIROBB__KERNEL_PASS 1
 #if defined(__clang__)
 #pragma clang attribute push(__attribute__((target("avx2"))), apply_to = function)
-#else
+#elif defined(__GNUC__)
 #pragma GCC push_options
 #pragma GCC target("avx2")
 #endif
@@ -6936,7 +7054,7 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #include HAIROBB_SELF
 #if defined(__clang__)
 #pragma clang attribute pop
-#else
+#elif defined(__GNUC__)
 #pragma GCC pop_options
 #endif
 #undef HAIROBB__KERNEL_PASS

@@ -336,11 +336,11 @@ static void check_motion(const char *scene_name, const hair_scene *s, double ang
 int main(void)
 {
     hair_scene s;
-    const float far[3] = {1e5f, 5e4f, -1e5f};
+    const float far_away[3] = {1e5f, 5e4f, -1e5f};
     int time_steps;
     CHECK(scene_combed(&s, 20000, 21) == 0, "combed");
     check_scene("combed 20k", &s, CONFIGS);
-    scene_transform(&s, far, 1.0f);
+    scene_transform(&s, far_away, 1.0f);
     check_scene("combed 20k at 1e5", &s, 1);
     scene_free(&s);
     CHECK(scene_curly(&s, 20000, 22) == 0, "curly");
@@ -353,7 +353,7 @@ int main(void)
        translation of 0.5 crosses five strand spacings */
     CHECK(scene_combed(&s, 10000, 24) == 0, "combed");
     for (time_steps = 2; time_steps <= MAX_STEPS; ++time_steps) check_motion("combed 10k", &s, 0.8, 0.5, time_steps, CONFIGS);
-    scene_transform(&s, far, 1.0f);
+    scene_transform(&s, far_away, 1.0f);
     check_motion("combed 10k at 1e5", &s, 0.8, 0.5, 3, 1);
     scene_free(&s);
     return check_summary();

@@ -834,7 +834,7 @@ static void joint_check(joint_counts *jc, const hair_scene *sc, const ref_scene 
                         uint32_t a, scene_rng *rng)
 {
     hairobb_ray ray = joint_ray(sc, a, rng);
-    ref_hit ha, hb, *near;
+    ref_hit ha, hb, *nearer;
     hairobb_hit ours;
     int in_a = ref_intersect_segment(sc->vertices, sc->indices, a, ray.org, ray.dir, 0.0, INFINITY, &ha);
     int in_b = ref_intersect_segment(sc->vertices, sc->indices, a + 1, ray.org, ray.dir, 0.0, INFINITY, &hb);
@@ -842,7 +842,7 @@ static void joint_check(joint_counts *jc, const hair_scene *sc, const ref_scene 
     jc->rays++;
     if (!in_a && !in_b) return;
     jc->ref_hits++;
-    near = in_a && (!in_b || ha.t <= hb.t) ? &ha : &hb;
+    nearer = in_a && (!in_b || ha.t <= hb.t) ? &ha : &hb;
     if (!hairobb_intersect1(bvh, &ray, &ours)) {
         if (getenv("STRESS_VERBOSE") && jc->misses < 3) {
             int i;
@@ -856,10 +856,10 @@ static void joint_check(joint_counts *jc, const hair_scene *sc, const ref_scene 
         return;
     }
     if (!hit_is_finite(&ours)) jc->nonfinite++;
-    res = float_resolution(sc->vertices + 4 * (size_t)sc->indices[near->prim_id], ray.org);
-    dt = fabs((double)ours.t - near->t) * dir_length(ray.dir);
-    if (dt <= 1e-2 * near->r + 2.1 * res) return;
-    if (ours.t > near->t) {
+    res = float_resolution(sc->vertices + 4 * (size_t)sc->indices[nearer->prim_id], ray.org);
+    dt = fabs((double)ours.t - nearer->t) * dir_length(ray.dir);
+    if (dt <= 1e-2 * nearer->r + 2.1 * res) return;
+    if (ours.t > nearer->t) {
         jc->wrong_t++; /* the joint's hit was passed over */
         return;
     }

@@ -225,7 +225,7 @@ static void make_crossed_scene(size_t n, float **vertices, uint32_t **indices)
    r(u) around P(u) in 26 directions and the ribbon's cross-section (the
    disc orthogonal to P'(u): every ray sees the ribbon's width in it) in 8.
    Checked in double on the stored boxes, decoded as the traversal does. */
-#define MAX_PATH 128
+#define MAX_TREE_DEPTH 128
 
 /* A child box as the traversal sees it, decoded once: p is inside where
    lower <= m (p - centre) + offset <= upper on each axis, in double on the
@@ -237,7 +237,7 @@ typedef struct decoded_box {
 typedef struct tree_walk {
     const hairobb_bvh *bvh;
     int depth;                         /* the current path: boxes of its ancestors */
-    size_t path[MAX_PATH];
+    size_t path[MAX_TREE_DEPTH];
     decoded_box *boxes;
     size_t box_count, box_cap;
     size_t *path_boxes;                /* every leaf's ancestors' boxes, from leaf_path[leaf] on */
@@ -397,7 +397,7 @@ static void walk_tree(tree_walk *w, uint64_t ref, unsigned depth)
     {
         const uint64_t *child = node_children(w->bvh, ref);
         int lane;
-        if (!child || w->depth >= MAX_PATH || (ref & ~(uint64_t)15) + node_size(type) > w->bvh->node_bytes) {
+        if (!child || w->depth >= MAX_TREE_DEPTH || (ref & ~(uint64_t)15) + node_size(type) > w->bvh->node_bytes) {
             ++w->bad_refs;
             return;
         }
