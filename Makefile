@@ -201,19 +201,31 @@ compile-matrix: | $(B)
 	    x86_64-w64-mingw32-g++ -x c++ -std=c++11 -Wall -Wextra -pedantic -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
 	    echo "compile-matrix: $$cc $$flags (C99 and C++11) clean"; done; \
 	else echo "compile-matrix: $$cc missing, the Windows builds left out"; fi
+	@# AArch64 (the NEON path), where make test installed the cross compilers
+	@set -e; cc=aarch64-linux-gnu-gcc; if command -v $$cc >/dev/null && command -v aarch64-linux-gnu-g++ >/dev/null; then \
+	  for flags in "" "-DHAIROBB_STATIC" "-DHAIROBB_NO_SIMD" "-DHAIROBB_NODE_WIDTH=8" "-DHAIROBB_NO_THREADS"; do \
+	    $$cc $(WARN) -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
+	    aarch64-linux-gnu-g++ -x c++ -std=c++11 -Wall -Wextra -pedantic -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
+	    echo "compile-matrix: $$cc $$flags (C99 and C++11) clean"; done; \
+	else echo "compile-matrix: aarch64-linux-gnu-gcc or -g++ missing, the AArch64 builds left out"; fi
 
 # the Windows tier (tests/run_windows.sh): the quick tier's core programs and
 # test_threads built with mingw-w64 and run under wine, and the same trees
 # and hits as this machine's build; it builds its programs when it runs
 $(B)/run_windows: tests/run_windows.sh | $(B)
 	@printf '#!/bin/sh\nexec sh tests/run_windows.sh $(B)\n' > $@ && chmod +x $@
+# the AArch64 tier (tests/run_arm64.sh): the NEON path against plain C under
+# qemu, and the same trees and hits as this machine's 4-wide build
+$(B)/run_arm64: tests/run_arm64.sh | $(B)
+	@printf '#!/bin/sh\nexec sh tests/run_arm64.sh $(B)\n' > $@ && chmod +x $@
 
 # the AVX2 kernels of the dispatch build call no baseline code (objdump)
 $(B)/check_dispatch_calls: tests/check_dispatch_calls.sh $(B)/simd_dispatch_w8.o
 	@printf '#!/bin/sh\nexec sh tests/check_dispatch_calls.sh $(B)/simd_dispatch_w8.o\n' > $@ && chmod +x $@
 
-test: deps $(TESTS) $(SANITIZED) compile-matrix examples $(B)/run_examples $(B)/check_dispatch_calls $(B)/motion_cost $(B)/run_windows
-	@sh tests/run_all.sh $(B)/run_windows $(SANITIZED) $(TESTS) $(B)/run_examples $(B)/check_dispatch_calls
+test: deps $(TESTS) $(SANITIZED) compile-matrix examples $(B)/run_examples $(B)/check_dispatch_calls $(B)/motion_cost \
+      $(B)/run_windows $(B)/run_arm64
+	@sh tests/run_all.sh $(B)/run_arm64 $(B)/run_windows $(SANITIZED) $(TESTS) $(B)/run_examples $(B)/check_dispatch_calls
 
 check: $(CHECK_TESTS)
 	@$(if $(X86),,echo "test_simd left out: $(CC) does not target x86";) sh tests/run_all.sh $(CHECK_TESTS)

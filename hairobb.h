@@ -104,11 +104,13 @@
      HAIROBB_NO_SIMD         plain C everywhere (same answers as the SIMD paths).
      HAIROBB_NO_STDIO        leave out hairobb_hair_load, hairobb_save_file and
                              hairobb_load_file (no <stdio.h>).
-     HAIROBB_NO_THREADS      build on the calling thread only. Otherwise, on
-                             POSIX systems, the build uses pthreads: link
-                             with -pthread (glibc 2.34 and later need nothing).
-                             Elsewhere the build runs on the calling thread,
-                             or on options.parallel_for.
+     HAIROBB_NO_THREADS      build on the calling thread only. Otherwise the
+                             build uses Win32 threads on Windows (Vista and
+                             later; the implementation includes <windows.h>,
+                             lean and without min/max macros), and pthreads
+                             on POSIX systems: link with -pthread (glibc 2.34
+                             and later need nothing). Elsewhere it runs on
+                             the calling thread, or on options.parallel_for.
      HAIROBB_NO_DISPATCH     no AVX2 copy of the kernels (SIMD PATHS).
      HAIROBB_NO_HUGE_PAGES   no madvise(MADV_HUGEPAGE). Otherwise, on Linux
                              where <sys/mman.h> declares it (glibc or musl
@@ -447,15 +449,22 @@
   --------------
      The traversal and intersector exist in plain C, SSE2, SSE4.1, AVX and
      AVX2 versions, which give the same hits bit for bit (no FMA). The
-     compiler's target picks one (-msse4.1, -mavx2, -march=...). Where that
-     target lacks AVX2, gcc 5+ and clang 4+ on x86 compile the kernels a
-     second time for AVX2 (target pragmas; no flag needed), and
-     hairobb_build picks them where the CPU runs AVX2: a plain `cc -O2`
+     compiler's target picks one (-msse4.1, -mavx2, -march=..., MSVC's
+     /arch:AVX2). Where that target lacks AVX2, gcc 5+ and clang 4+ on x86,
+     and MSVC on x64, compile the kernels a second time for AVX2 (target
+     pragmas; MSVC needs none; no flag needed), and hairobb_build picks
+     them where the CPU and its operating system run AVX2: a plain `cc -O2`
      build then traces about as fast as one for the CPU, and much faster
      than its SSE2 path. For that the file includes itself by its name:
      keep it hairobb.h, or define HAIROBB_SELF. HAIROBB_NO_DISPATCH turns
-     the second copy off. There is no AVX-512 path, and no SIMD path off
-     x86 (plain C runs there).
+     the second copy off. On AArch64 (gcc, clang; MSVC's ARM64 reviewed
+     only) the NEON path runs, with no dispatch: NEON is always there;
+     nodes are 4-wide there by default. There is no AVX-512 path, and
+     other CPUs run plain C. The compiler-specific spellings (inlining,
+     bit scans, CPU checks, prefetches) are in one block of >>platform,
+     for gcc and clang, and for MSVC; MSVC's are reviewed against its
+     documentation but not compiled here (the tests build with gcc,
+     clang and mingw-w64).
 
 
   14. THREAD SAFETY
@@ -602,7 +611,8 @@ typedef enum hairobb_simd {
     HAIROBB_SIMD_SSE2,
     HAIROBB_SIMD_SSE41,
     HAIROBB_SIMD_AVX,
-    HAIROBB_SIMD_AVX2
+    HAIROBB_SIMD_AVX2,
+    HAIROBB_SIMD_NEON           /* AArch64, where NEON is always present */
 } hairobb_simd;
 
 /* A renderer's own task system for the build (options.parallel_for): it
@@ -860,8 +870,16 @@ HAIROBB_DEF void hairobb_hair_free(hairobb_hair *hair);
 #define HAIROBB__AVX2 1
 #endif
 #endif
+/* AArch64 always has NEON (Advanced SIMD): its path needs no dispatch. */
+#define HAIROBB__NEON 0
+#if !defined(HAIROBB_NO_SIMD) && (defined(__aarch64__) || defined(_M_ARM64)) && !HAIROBB__SSE
+#undef HAIROBB__NEON
+#define HAIROBB__NEON 1
+#include <arm_neon.h>
+#endif
 #define HAIROBB__BASELINE_SIMD (HAIROBB__AVX2 ? HAIROBB_SIMD_AVX2 : HAIROBB__AVX ? HAIROBB_SIMD_AVX : \
-                                HAIROBB__SSE41 ? HAIROBB_SIMD_SSE41 : HAIROBB__SSE ? HAIROBB_SIMD_SSE2 : HAIROBB_SIMD_NONE)
+                                HAIROBB__SSE41 ? HAIROBB_SIMD_SSE41 : HAIROBB__SSE ? HAIROBB_SIMD_SSE2 : \
+                                HAIROBB__NEON ? HAIROBB_SIMD_NEON : HAIROBB_SIMD_NONE)
 /* Runtime dispatch: where the baseline lacks AVX2, gcc and clang compile the
    kernels a second time for AVX2 (target pragmas; their intrinsics need no
    -m flag), MSVC likewise (its intrinsics need no flag or pragma), and each
@@ -1305,6 +1323,7 @@ HAIROBB_DEF const char *hairobb_simd_string(hairobb_simd simd)
     case HAIROBB_SIMD_SSE41: return "SSE4.1";
     case HAIROBB_SIMD_AVX: return "AVX";
     case HAIROBB_SIMD_AVX2: return "AVX2";
+    case HAIROBB_SIMD_NEON: return "NEON";
     }
     return "unknown hairobb_simd";
 }
@@ -1350,7 +1369,7 @@ static hairobb_result hairobb__resolve_options(const hairobb_build_options *give
 {
     if (given) *opt = *given; else memset(opt, 0, sizeof *opt);
     if ((unsigned)opt->basis > HAIROBB_BASIS_LINEAR || (opt->basis == HAIROBB_BASIS_HERMITE) != (opt->tangents != NULL) ||
-        (unsigned)opt->simd > HAIROBB_SIMD_AVX2 || opt->threads > HAIROBB__MAX_THREADS)
+        (unsigned)opt->simd > HAIROBB_SIMD_NEON || opt->threads > HAIROBB__MAX_THREADS)
         return HAIROBB_ERROR_INVALID_ARGUMENT;
     if (purpose == HAIROBB__FOR_LOAD) return (unsigned)opt->verify_hair > HAIROBB_OFF ? HAIROBB_ERROR_INVALID_ARGUMENT : HAIROBB_OK;
     if (opt->max_leaf_size == 0) opt->max_leaf_size = HAIROBB__DEFAULT_MAX_LEAF;
@@ -5829,6 +5848,62 @@ static inline hairobb__v4 hairobb__v4_from_bytes(const signed char *q)
     return _mm_setr_ps((float)q[0], (float)q[1], (float)q[2], (float)q[3]);
 }
 #endif
+#elif HAIROBB__NEON
+/* NEON: the same operations and rounding (no fused multiply-add); min and
+   max as selects, for SSE's NaN rule (NEON's own vminq and vminnmq have
+   other ones); the comparison masks gathered into bits as movemask does. */
+typedef float32x4_t hairobb__v4;
+static inline hairobb__v4 hairobb__v4_load(const float *p) { return vld1q_f32(p); }
+static inline hairobb__v4 hairobb__v4_set1(float x) { return vdupq_n_f32(x); }
+static inline hairobb__v4 hairobb__v4_set3(float x, float y, float z)
+{
+    float lanes[4];
+    lanes[0] = x; lanes[1] = y; lanes[2] = z; lanes[3] = 0.0f;
+    return vld1q_f32(lanes);
+}
+static inline hairobb__v4 hairobb__v4_add(hairobb__v4 a, hairobb__v4 b) { return vaddq_f32(a, b); }
+static inline hairobb__v4 hairobb__v4_sub(hairobb__v4 a, hairobb__v4 b) { return vsubq_f32(a, b); }
+static inline hairobb__v4 hairobb__v4_mul(hairobb__v4 a, hairobb__v4 b) { return vmulq_f32(a, b); }
+static inline hairobb__v4 hairobb__v4_div(hairobb__v4 a, hairobb__v4 b) { return vdivq_f32(a, b); }
+static inline hairobb__v4 hairobb__v4_min(hairobb__v4 a, hairobb__v4 b) { return vbslq_f32(vcltq_f32(a, b), a, b); }
+static inline hairobb__v4 hairobb__v4_max(hairobb__v4 a, hairobb__v4 b) { return vbslq_f32(vcgtq_f32(a, b), a, b); }
+static inline int hairobb__v4_mask_bits(uint32x4_t mask)
+{
+    static const uint32_t lane_bits[4] = {1u, 2u, 4u, 8u};
+    return (int)vaddvq_u32(vandq_u32(mask, vld1q_u32(lane_bits)));
+}
+static inline int hairobb__v4_le_bits(hairobb__v4 a, hairobb__v4 b) { return hairobb__v4_mask_bits(vcleq_f32(a, b)); }
+static inline int hairobb__v4_lt_bits(hairobb__v4 a, hairobb__v4 b) { return hairobb__v4_mask_bits(vcltq_f32(a, b)); }
+static inline void hairobb__v4_store(float *p, hairobb__v4 a) { vst1q_f32(p, a); }
+static inline hairobb__v4 hairobb__v4_abs(hairobb__v4 a) { return vabsq_f32(a); }
+static inline hairobb__v4 hairobb__v4_sqrt(hairobb__v4 a) { return vsqrtq_f32(a); }
+static inline hairobb__v4 hairobb__v4_pairs(hairobb__v4 a, hairobb__v4 b, int k)
+{
+    return k == 0 ? vcombine_f32(vget_low_f32(a), vget_low_f32(b)) :
+           k == 1 ? vcombine_f32(vget_low_f32(vextq_f32(a, a, 1)), vget_low_f32(vextq_f32(b, b, 1))) :
+                    vcombine_f32(vget_high_f32(a), vget_high_f32(b));
+}
+static inline void hairobb__v4_transpose(hairobb__v4 *a, hairobb__v4 *b, hairobb__v4 *c, hairobb__v4 *d)
+{
+    float32x4_t ab0 = vtrn1q_f32(*a, *b), ab1 = vtrn2q_f32(*a, *b);   /* a0 b0 a2 b2, a1 b1 a3 b3 */
+    float32x4_t cd0 = vtrn1q_f32(*c, *d), cd1 = vtrn2q_f32(*c, *d);
+    *a = vreinterpretq_f32_f64(vtrn1q_f64(vreinterpretq_f64_f32(ab0), vreinterpretq_f64_f32(cd0)));
+    *b = vreinterpretq_f32_f64(vtrn1q_f64(vreinterpretq_f64_f32(ab1), vreinterpretq_f64_f32(cd1)));
+    *c = vreinterpretq_f32_f64(vtrn2q_f64(vreinterpretq_f64_f32(ab0), vreinterpretq_f64_f32(cd0)));
+    *d = vreinterpretq_f32_f64(vtrn2q_f64(vreinterpretq_f64_f32(ab1), vreinterpretq_f64_f32(cd1)));
+}
+static inline float hairobb__v4_hmax(hairobb__v4 a)
+{
+    hairobb__v4 t = hairobb__v4_max(a, vextq_f32(a, a, 2));   /* max(a0, a2), max(a1, a3) */
+    float t0 = vgetq_lane_f32(t, 0), t1 = vgetq_lane_f32(t, 1);
+    return t0 > t1 ? t0 : t1;
+}
+static inline hairobb__v4 hairobb__v4_from_bytes(const signed char *q)
+{
+    int32_t packed;
+    memcpy(&packed, q, sizeof packed);
+    return vcvtq_f32_s32(vmovl_s16(vget_low_s16(vmovl_s8(vreinterpret_s8_s32(vdup_n_s32(packed))))));
+}
 #else
 typedef struct hairobb__v4 { float f[4]; } hairobb__v4;
 #define HAIROBB__V4_MAP(expr) hairobb__v4 r; int i; for (i = 0; i < 4; ++i) r.f[i] = (expr); return r

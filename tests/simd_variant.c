@@ -1,5 +1,6 @@
 /* simd_variant.c - compiled once per SIMD path (plain C, SSE4.1, AVX2, and
-   the x86-64 baseline with its AVX2 kernels for runtime dispatch) with
+   the x86-64 baseline with its AVX2 kernels for runtime dispatch; on
+   AArch64 plain C and NEON) with
    HAIROBB_STATIC, so the implementations live side by side in test_simd and
    trace the same rays. VARIANT names this copy's entry point. */
 #include <stddef.h>

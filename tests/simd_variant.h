@@ -16,4 +16,5 @@ SIMD_VARIANT_SIGNATURE(trace_plain);
 SIMD_VARIANT_SIGNATURE(trace_sse);
 SIMD_VARIANT_SIGNATURE(trace_avx);
 SIMD_VARIANT_SIGNATURE(trace_dispatch);
+SIMD_VARIANT_SIGNATURE(trace_neon);
 #endif

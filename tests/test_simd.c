@@ -1,6 +1,7 @@
 /* test_simd.c - every SIMD path gives the same answers as the plain C path:
    the same rays traced by four builds of hairobb.h (plain C; SSE4.1; AVX2;
-   the x86-64 baseline, forced to SSE2 and dispatched to its AVX2 kernels),
+   the x86-64 baseline, forced to SSE2 and dispatched to its AVX2 kernels;
+   on AArch64 two: plain C and NEON),
    compared field by field, bit for bit, on several scenes, node policies and
    intersector precisions, curve bases read with and without the Bezier
    copy, and on moving hair (motion blur: rotating and translating fur, 2
@@ -13,7 +14,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* rays a side, and segments a static scene; the AArch64 tier under qemu
+   builds and traces less (tests/run_arm64.sh) */
+#ifndef SIDE
 #define SIDE 128
+#endif
+#ifndef SIMD_TEST_SEGMENTS
+#define SIMD_TEST_SEGMENTS 30000
+#endif
 
 static int same_hit(const hairobb_hit *a, const hairobb_hit *b)
 {
@@ -29,7 +37,7 @@ typedef SIMD_VARIANT_SIGNATURE((*trace_fn));
 /* the copies are static: the test names the paths itself */
 static const char *path_name(hairobb_simd simd)
 {
-    static const char *names[] = {"auto", "plain C", "SSE2", "SSE4.1", "AVX", "AVX2"};
+    static const char *names[] = {"auto", "plain C", "SSE2", "SSE4.1", "AVX", "AVX2", "NEON"};
     return (unsigned)simd < sizeof names / sizeof names[0] ? names[simd] : "?";
 }
 
@@ -62,21 +70,32 @@ static void compare_paths(const hair_scene *s, const hairobb_build_options *opti
     hairobb_hit *plain = (hairobb_hit *)malloc(sizeof(hairobb_hit) * n);
     hairobb_hit *other = (hairobb_hit *)malloc(sizeof(hairobb_hit) * n);
     int *occluded_plain = (int *)malloc(sizeof(int) * n), *occluded_other = (int *)malloc(sizeof(int) * n);
-    int have_avx = __builtin_cpu_supports("avx2"), k;
+    int k;
     hairobb_simd used = HAIROBB_SIMD_AUTO;
     size_t visits[4];
     /* points read where they are, or made on the fly by the path's own code */
     int made = options->time_steps >= 2 || (options->basis != HAIROBB_BASIS_BEZIER && options->bezier_copy == HAIROBB_OFF);
+#if defined(__aarch64__)
+    /* NEON is AArch64's baseline: asked for, and by AUTO */
+    int have_avx = 0;
+    simd_path paths[] = {
+        {"NEON", trace_neon, HAIROBB_SIMD_NEON, HAIROBB_SIMD_NEON, 0},
+        {"NEON (auto)", trace_neon, HAIROBB_SIMD_AUTO, HAIROBB_SIMD_NEON, 0},
+    };
+#else
     /* the x86-64 baseline copy has the AVX2 kernels too: AUTO picks them where the CPU has AVX2 */
-    simd_path paths[4] = {
+    int have_avx = __builtin_cpu_supports("avx2");
+    simd_path paths[] = {
         {"SSE4.1", trace_sse, HAIROBB_SIMD_SSE41, HAIROBB_SIMD_SSE41, 0},
         {"SSE2", trace_dispatch, HAIROBB_SIMD_SSE2, HAIROBB_SIMD_SSE2, 0},
         {"AVX2 -mavx2", trace_avx, HAIROBB_SIMD_AUTO, HAIROBB_SIMD_AVX2, 1},
         {"AVX2 dispatched", trace_dispatch, HAIROBB_SIMD_AUTO, HAIROBB_SIMD_AVX2, 0},
     };
+#endif
+    const int path_count = (int)(sizeof paths / sizeof paths[0]);
     hairobb_build_options asked = *options;
 
-    if (!have_avx) paths[3].expect = HAIROBB_SIMD_SSE2;
+    if (!have_avx && path_count == 4) paths[3].expect = HAIROBB_SIMD_SSE2;
 
     scene_camera_rays(s, SIDE, SIDE, org, dir);
     scene_rng_seed(&rng, 5);
@@ -98,7 +117,7 @@ static void compare_paths(const hair_scene *s, const hairobb_build_options *opti
     CHECK(outside_hits == 0, "%s %s: %zu rays at times outside [0, 1] hit", s->name, what, outside_hits);
 
     printf("%-8s %-46s %5zu hits of %zu rays; differ from plain C:", s->name, what, hits, n);
-    for (k = 0; k < 4; ++k) {
+    for (k = 0; k < path_count; ++k) {
         if (paths[k].needs_avx2 && !have_avx) { printf(" %s skipped (no AVX2),", paths[k].name); continue; }
         asked.simd = paths[k].request;
         used = HAIROBB_SIMD_AUTO;
@@ -117,7 +136,7 @@ static void compare_paths(const hair_scene *s, const hairobb_build_options *opti
               path_name(used), visits[2], visits[3]);
         for (i = 0; i < n; ++i) differ[k] += !same_hit(&plain[i], &other[i]) || occluded_plain[i] != occluded_other[i];
         CHECK(differ[k] == 0, "%s %s: %s differs from plain C on %zu of %zu rays", s->name, what, paths[k].name, differ[k], n);
-        printf(" %s (%s) %zu%s", paths[k].name, path_name(used), differ[k], k < 3 ? "," : "");
+        printf(" %s (%s) %zu%s", paths[k].name, path_name(used), differ[k], k < path_count - 1 ? "," : "");
     }
     printf("\n");
     free(org); free(dir); free(rays); free(plain); free(other); free(occluded_plain); free(occluded_other);
@@ -160,9 +179,9 @@ int main(void)
 {
     hair_scene scenes[3];
     int k, policy;
-    CHECK(scene_combed(&scenes[0], 30000, 11) == 0, "combed");
-    CHECK(scene_curly(&scenes[1], 30000, 12) == 0, "curly");
-    CHECK(scene_random(&scenes[2], 30000, 13) == 0, "random");
+    CHECK(scene_combed(&scenes[0], SIMD_TEST_SEGMENTS, 11) == 0, "combed");
+    CHECK(scene_curly(&scenes[1], SIMD_TEST_SEGMENTS, 12) == 0, "curly");
+    CHECK(scene_random(&scenes[2], SIMD_TEST_SEGMENTS, 13) == 0, "random");
     /* moving hair, 10k segments (a build bounds every step): strands swept
        by 0.8 rad about their roots, or the whole scene shifted by 0.5
        (several strand spacings) */

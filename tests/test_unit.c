@@ -963,9 +963,15 @@ static void test_bad_input(void)
     /* options.simd: the compiler's baseline path, or AVX2 where the CPU has
        it (dispatched where the baseline lacks it); any other is UNSUPPORTED */
     {
+#if defined(__x86_64__) || defined(__i386__)
         int have_avx2 = __builtin_cpu_supports("avx2") != 0, k;
+#else
+        int have_avx2 = 0, k;
+#endif
         hairobb_simd baseline =
-#if defined(__AVX2__)
+#if defined(__aarch64__)
+            HAIROBB_SIMD_NEON;
+#elif defined(__AVX2__)
             HAIROBB_SIMD_AVX2;
 #elif defined(__AVX__)
             HAIROBB_SIMD_AVX;
@@ -974,7 +980,7 @@ static void test_bad_input(void)
 #else
             HAIROBB_SIMD_SSE2;
 #endif
-        for (k = HAIROBB_SIMD_AUTO; k <= HAIROBB_SIMD_AVX2; ++k) {
+        for (k = HAIROBB_SIMD_AUTO; k <= HAIROBB_SIMD_NEON; ++k) {
             hairobb_simd asked = (hairobb_simd)k;
             hairobb_simd expect = asked == HAIROBB_SIMD_AUTO ? (have_avx2 ? HAIROBB_SIMD_AVX2 : baseline) : asked;
             int runs = asked == HAIROBB_SIMD_AUTO || asked == baseline || (asked == HAIROBB_SIMD_AVX2 && have_avx2);
@@ -991,11 +997,12 @@ static void test_bad_input(void)
                       hairobb_result_string(r));
             }
         }
-        opt.simd = (hairobb_simd)(HAIROBB_SIMD_AVX2 + 1);
+        opt.simd = (hairobb_simd)(HAIROBB_SIMD_NEON + 1);
         CHECK(hairobb_build(vertices, 32, indices, n, &opt, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT && bvh == NULL,
               "simd out of range");
         CHECK(hairobb_get_simd(NULL) == HAIROBB_SIMD_NONE, "simd of a NULL BVH");
         CHECK(strcmp(hairobb_simd_string(HAIROBB_SIMD_SSE41), "SSE4.1") == 0 &&
+              strcmp(hairobb_simd_string(HAIROBB_SIMD_NEON), "NEON") == 0 &&
               strcmp(hairobb_simd_string((hairobb_simd)99), "unknown hairobb_simd") == 0, "simd names");
     }
     free(vertices);
