@@ -196,14 +196,14 @@ compile-matrix: | $(B)
 	  echo "compile-matrix: $$cc with the header renamed (HAIROBB_SELF) clean"; done
 	@# Windows (mingw-w64: Win32 threads, dispatch), where make test installed it
 	@set -e; cc=x86_64-w64-mingw32-gcc; if command -v $$cc >/dev/null; then \
-	  for flags in "" "-DHAIROBB_STATIC" "-DHAIROBB_NO_SIMD" "-mavx2" "-DHAIROBB_NODE_WIDTH=4" "-DHAIROBB_NO_THREADS"; do \
+	  for flags in "" "-DHAIROBB_NO_SIMD" "-mavx2" "-DHAIROBB_NO_THREADS"; do \
 	    $$cc $(WARN) -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
 	    x86_64-w64-mingw32-g++ -x c++ -std=c++11 -Wall -Wextra -pedantic -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
 	    echo "compile-matrix: $$cc $$flags (C99 and C++11) clean"; done; \
 	else echo "compile-matrix: $$cc missing, the Windows builds left out"; fi
 	@# AArch64 (the NEON path), where make test installed the cross compilers
 	@set -e; cc=aarch64-linux-gnu-gcc; if command -v $$cc >/dev/null && command -v aarch64-linux-gnu-g++ >/dev/null; then \
-	  for flags in "" "-DHAIROBB_STATIC" "-DHAIROBB_NO_SIMD" "-DHAIROBB_NODE_WIDTH=8" "-DHAIROBB_NO_THREADS"; do \
+	  for flags in "" "-DHAIROBB_NO_SIMD" "-DHAIROBB_NODE_WIDTH=8"; do \
 	    $$cc $(WARN) -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
 	    aarch64-linux-gnu-g++ -x c++ -std=c++11 -Wall -Wextra -pedantic -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $(B)/matrix.o; \
 	    echo "compile-matrix: $$cc $$flags (C99 and C++11) clean"; done; \

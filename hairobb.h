@@ -490,7 +490,7 @@
      (docs/design.md walks through them):
        >>api             the declarations below this manual
        >>implementation  what HAIROBB_IMPLEMENTATION compiles:
-       >>platform        the C library, allocation, instruction sets, threads, huge pages
+       >>platform        the C library, allocation, instruction sets, threads, spellings, huge pages
        >>defaults        limits, named default constants, the SAH cost model, node references
        >>vector          small vector helpers
        >>bvh             the BVH object: what a build or a load fills in

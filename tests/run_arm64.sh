@@ -15,17 +15,10 @@ A=$B/arm64
 ARMCC=${ARMCC:-aarch64-linux-gnu-gcc}
 FLAGS="-std=c99 -Wall -Wextra -pedantic -O2 -ffp-contract=off -I."
 jobs=$(nproc 2>/dev/null || echo 2)
+. tests/cross_tier.sh
 
 if ! command -v "$ARMCC" > /dev/null 2>&1 || ! command -v qemu-aarch64 > /dev/null 2>&1; then
-    why="the AArch64 tier: $ARMCC or qemu-aarch64 is missing (sudo apt-get install gcc-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user)"
-    if [ "${HAIROBB_REQUIRE_CROSS:-0}" = 1 ]; then
-        echo "FAIL $why (HAIROBB_REQUIRE_CROSS is set)"
-        echo "0 passed, 1 failed, 0 skipped"
-        exit 1
-    fi
-    echo "SKIP $why"
-    echo "0 passed, 0 failed, 1 skipped"
-    exit 0
+    tier_missing "the AArch64 tier: $ARMCC or qemu-aarch64 is missing (sudo apt-get install gcc-aarch64-linux-gnu libc6-dev-arm64-cross qemu-user)"
 fi
 mkdir -p "$A" || exit 1
 start=$(date +%s)
@@ -48,32 +41,9 @@ for p in $PROGRAMS; do rm -f "$A/$p.out" "$A/$p.rc"; done
 printf '%s\n' $PROGRAMS | xargs -P "$jobs" -I{} sh -c "qemu-aarch64 $A/{} > $A/{}.out 2>&1; echo \$? > $A/{}.rc"
 qemu-aarch64 "$A/hits_hash" "$A/scenes.bin" > "$A/hits_arm64.txt" 2> /dev/null
 
-passed=0; failed=0; skipped=0
 for p in $PROGRAMS; do
-    line=$(grep -E '^[0-9]+ passed, [0-9]+ failed' "$A/$p.out" 2> /dev/null | tail -n 1)
-    rc=$(cat "$A/$p.rc" 2> /dev/null || echo "not run")
-    grep -E '^(FAIL|SKIP) ' "$A/$p.out" 2> /dev/null | sed "s|^|$p (AArch64): |"
-    if [ -z "$line" ] || [ "$rc" != 0 ]; then
-        echo "FAIL $p under qemu-aarch64: exit $rc, ${line:-no summary line} ($A/$p.out)"
-        failed=$((failed + 1))
-        [ -z "$line" ] && continue
-    else
-        echo "ok: $p under qemu-aarch64: $line"
-    fi
-    n=${line%% passed*}; f=${line#*, }; f=${f%% failed*}
-    case $line in *skipped*) s=${line##*, }; s=${s%% skipped*} ;; *) s=0 ;; esac
-    passed=$((passed + n)); failed=$((failed + f)); skipped=$((skipped + s))
+    tier_count "$p" qemu-aarch64 "$A/$p.out" "$A/$p.rc"
 done
 grep -h 'differ from plain C' "$A/test_simd.out" 2> /dev/null | head -n 3
-cat "$A/hits_arm64.txt"
-if [ -s "$A/hits_native.txt" ] && cmp -s "$A/hits_native.txt" "$A/hits_arm64.txt"; then
-    echo "PASS hits_hash under qemu-aarch64 (NEON): the same trees and hits as this machine's 4-wide build ($(wc -l < "$A/hits_native.txt") scene and option sets)"
-    passed=$((passed + 1))
-else
-    echo "FAIL hits_hash under qemu-aarch64 differs from this machine's 4-wide build:"
-    diff "$A/hits_native.txt" "$A/hits_arm64.txt"
-    failed=$((failed + 1))
-fi
-echo "AArch64 tier: $(($(date +%s) - start)) s"
-echo "$passed passed, $failed failed, $skipped skipped"
-[ "$failed" = 0 ]
+tier_same_hits "$A/hits_native.txt" "$A/hits_arm64.txt" "qemu-aarch64 (NEON)" "this machine's 4-wide build"
+tier_end "AArch64 tier" "$start"

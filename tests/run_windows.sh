@@ -1,5 +1,7 @@
 #!/bin/sh
-# make test's Windows tier: the quick tier's core programs and test_threads,
+# make test's Windows tier: the quick tier's core programs (all but
+# test_options, the longest, whose combinations the Linux run covers) and
+# test_threads,
 # built with mingw-w64 (x86-64, static: the library's Win32 threads, its
 # AVX2 dispatch under mingw's gcc) and run under wine; and hits_hash, whose
 # trees and hits must equal this machine's own build's to the bit (the
@@ -11,21 +13,14 @@
 B=${1:-build}
 W=$B/windows
 WINCC=${WINCC:-x86_64-w64-mingw32-gcc}
-PROGRAMS="test_options test_threads test_unit test_conservative test_save test_refit test_motion test_stress
-          test_reference test_hair test_filter hits_hash"
+PROGRAMS="test_threads test_unit test_conservative test_save test_refit test_motion test_stress test_reference
+          test_hair test_filter hits_hash"
 FLAGS="-std=c99 -Wall -Wextra -pedantic -O2 -ffp-contract=off -I. -include tests/windows_port.h"
 jobs=$(nproc 2>/dev/null || echo 2)
+. tests/cross_tier.sh
 
 if ! command -v "$WINCC" > /dev/null 2>&1 || ! command -v wine > /dev/null 2>&1; then
-    why="the Windows tier: $WINCC or wine is missing (sudo apt-get install gcc-mingw-w64-x86-64 wine64)"
-    if [ "${HAIROBB_REQUIRE_CROSS:-0}" = 1 ]; then
-        echo "FAIL $why (HAIROBB_REQUIRE_CROSS is set)"
-        echo "0 passed, 1 failed, 0 skipped"
-        exit 1
-    fi
-    echo "SKIP $why"
-    echo "0 passed, 0 failed, 1 skipped"
-    exit 0
+    tier_missing "the Windows tier: $WINCC or wine is missing (sudo apt-get install gcc-mingw-w64-x86-64 wine64)"
 fi
 mkdir -p "$W" || exit 1
 start=$(date +%s)
@@ -45,37 +40,14 @@ wine cmd /c exit > /dev/null 2>&1   # makes the prefix once, before the programs
 echo "wine $(wine --version 2>/dev/null): prefix ready in $(($(date +%s) - began)) s"
 
 "$W/hits_hash_native" --write "$W/scenes.bin" && "$W/hits_hash_native" "$W/scenes.bin" > "$W/hits_native.txt"
-for p in $PROGRAMS; do rm -f "$W/$p.out"; done
+for p in $PROGRAMS; do rm -f "$W/$p.out" "$W/$p.rc"; done
 printf '%s\n' $PROGRAMS | grep -v hits_hash | xargs -P "$jobs" -I{} sh -c "wine $W/{}.exe > $W/{}.out 2>&1; echo \$? > $W/{}.rc"
 wine "$W/hits_hash.exe" "$W/scenes.bin" 2> /dev/null | tr -d '\r' > "$W/hits_windows.txt"
 
-passed=0; failed=0; skipped=0
 for p in $PROGRAMS; do
     [ "$p" = hits_hash ] && continue
-    tr -d '\r' < "$W/$p.out" 2> /dev/null > "$W/$p.txt"
-    line=$(grep -E '^[0-9]+ passed, [0-9]+ failed' "$W/$p.txt" | tail -n 1)
-    rc=$(cat "$W/$p.rc" 2> /dev/null || echo "not run")
-    grep -E '^(FAIL|SKIP) ' "$W/$p.txt" | sed "s|^|$p.exe: |"
-    if [ -z "$line" ] || [ "$rc" != 0 ]; then
-        echo "FAIL $p.exe under wine: exit $rc, ${line:-no summary line} ($W/$p.txt)"
-        failed=$((failed + 1))
-        [ -z "$line" ] && continue
-    else
-        echo "ok: $p.exe under wine: $line"
-    fi
-    n=${line%% passed*}; f=${line#*, }; f=${f%% failed*}
-    case $line in *skipped*) s=${line##*, }; s=${s%% skipped*} ;; *) s=0 ;; esac
-    passed=$((passed + n)); failed=$((failed + f)); skipped=$((skipped + s))
+    tr -d '\r' < "$W/$p.out" > "$W/$p.txt" 2> /dev/null
+    tier_count "$p.exe" wine "$W/$p.txt" "$W/$p.rc"
 done
-cat "$W/hits_windows.txt"
-if [ -s "$W/hits_native.txt" ] && cmp -s "$W/hits_native.txt" "$W/hits_windows.txt"; then
-    echo "PASS hits_hash.exe under wine: the same trees and hits as this machine's build ($(wc -l < "$W/hits_native.txt") scene and option sets)"
-    passed=$((passed + 1))
-else
-    echo "FAIL hits_hash.exe under wine differs from this machine's build:"
-    diff "$W/hits_native.txt" "$W/hits_windows.txt"
-    failed=$((failed + 1))
-fi
-echo "Windows tier: $(($(date +%s) - start)) s"
-echo "$passed passed, $failed failed, $skipped skipped"
-[ "$failed" = 0 ]
+tier_same_hits "$W/hits_native.txt" "$W/hits_windows.txt" wine "this machine's build"
+tier_end "Windows tier" "$start"
