@@ -979,12 +979,14 @@ static long hairobb__core_count(void) { return sysconf(_SC_NPROCESSORS_ONLN); }
    kernels call are always inlined: inside the AVX2 copy they are then
    compiled for AVX2 too. A call from AVX2 code into SSE code (without the
    VEX encoding) made the pieces intersector and the shared-rotation nodes
-   2x slower (bench, AMD EPYC). HAIROBB__NOINLINE and HAIROBB__COLD open a
+   2x slower (bench, AMD EPYC). HAIROBB__NOINLINE, HAIROBB__COLD and
+   HAIROBB__TARGET_AVX2 (MSVC needs none to use AVX2 intrinsics) open a
    declaration; HAIROBB__PREFETCH is only a hint. */
 #if defined(__GNUC__) || defined(__clang__)
 #define HAIROBB__INLINE static inline __attribute__((always_inline))
 #define HAIROBB__NOINLINE __attribute__((noinline))
 #define HAIROBB__COLD __attribute__((noinline, cold))
+#define HAIROBB__TARGET_AVX2 __attribute__((target("avx2")))
 #define HAIROBB__LIKELY(x) __builtin_expect(!!(x), 1)
 #define HAIROBB__PREFETCH(address) __builtin_prefetch(address)
 #elif defined(_MSC_VER)
@@ -992,6 +994,7 @@ static long hairobb__core_count(void) { return sysconf(_SC_NPROCESSORS_ONLN); }
 #define HAIROBB__INLINE static __forceinline
 #define HAIROBB__NOINLINE __declspec(noinline)
 #define HAIROBB__COLD __declspec(noinline)
+#define HAIROBB__TARGET_AVX2
 #define HAIROBB__LIKELY(x) (x)
 #if HAIROBB__SSE
 #define HAIROBB__PREFETCH(address) _mm_prefetch((const char *)(address), _MM_HINT_T0)
@@ -1000,6 +1003,7 @@ static long hairobb__core_count(void) { return sysconf(_SC_NPROCESSORS_ONLN); }
 #define HAIROBB__INLINE static inline
 #define HAIROBB__NOINLINE
 #define HAIROBB__COLD
+#define HAIROBB__TARGET_AVX2
 #define HAIROBB__LIKELY(x) (x)
 #endif
 #ifndef HAIROBB__PREFETCH
@@ -6981,10 +6985,8 @@ static int hairobb__hit_filtered_out(const hairobb__ray_state *rs, uint32_t prim
 /* ------------------------------------------------------------------------ */
 /* >>tracing_api  Tracing API                                               */
 /* ------------------------------------------------------------------------ */
-#if HAIROBB__DISPATCH && (defined(__GNUC__) || defined(__clang__))
-static int hairobb__traverse_avx2(const hairobb_bvh *bvh, hairobb__ray_state *rs, int any_hit) __attribute__((target("avx2")));
-#elif HAIROBB__DISPATCH
-static int hairobb__traverse_avx2(const hairobb_bvh *bvh, hairobb__ray_state *rs, int any_hit);
+#if HAIROBB__DISPATCH
+HAIROBB__TARGET_AVX2 static int hairobb__traverse_avx2(const hairobb_bvh *bvh, hairobb__ray_state *rs, int any_hit);
 #endif
 
 /* The traversal of the BVH's path (every path gives the same answers). */
