@@ -1242,6 +1242,10 @@ struct hairobb_bvh {
     void *points_allocation;
     float *leaf_points;
     uint32_t *point_refs;
+    /* without the copy (bezier_copy OFF, moving hair): indices[leaf_prims[i]]
+       in leaf order, so that a leaf finds the caller's points with no load
+       waiting for indices[prim] (a dependent miss at scale). NULL with it. */
+    uint32_t *leaf_offsets;
     uint32_t *owned_indices;          /* other bases with the copy: the caller's indices, for hairobb_refit */
     hairobb_filter_fn hit_filter;
     void *hit_filter_user;
@@ -4591,6 +4595,11 @@ static void hairobb__copy_task(void *context, unsigned index)
     float *points = bvh->leaf_points;
     size_t i = (size_t)index * job->per_task, end = i + job->per_task;
     if (end > bvh->leaf_prim_count) end = bvh->leaf_prim_count;
+    if (bvh->leaf_offsets) {
+        for (; i < end; ++i) bvh->leaf_offsets[i] = bvh->indices[bvh->leaf_prims[i]];
+        job->ran[index] = 1;
+        return;
+    }
     for (; i < end; ++i) {
         size_t at = 4 * (size_t)bvh->indices[bvh->leaf_prims[i]];
         if (bvh->point_basis == HAIROBB_BASIS_BEZIER)
@@ -4607,15 +4616,19 @@ static void hairobb__copy_task(void *context, unsigned index)
    leaf's segments lie on consecutive 64-byte lines, and point_refs.
    hairobb_refit writes the points again into the same memory. Every
    segment has a reference in a built tree, and the loader checks a saved
-   one for that. On the BVH's threads (or parallel_for):
+   one for that. Without the copy, leaf_offsets instead (a refit leaves
+   them: the indices stay). On the BVH's threads (or parallel_for):
    the caller's arrays are read in no order of memory. */
 static hairobb_result hairobb__copy_points(hairobb_bvh *bvh)
 {
     size_t refs = bvh->leaf_prim_count, i;
     unsigned tasks, k;
     hairobb__copy_job job;
-    if (!bvh->copy_points) return HAIROBB_OK;
-    if (!bvh->points_allocation) {
+    if (!bvh->copy_points) {
+        if (bvh->leaf_offsets) return HAIROBB_OK;
+        bvh->leaf_offsets = HAIROBB__CAST(uint32_t *, hairobb__malloc_large(sizeof(uint32_t) * refs, bvh->allocator_user));
+        if (!bvh->leaf_offsets) return HAIROBB_ERROR_OUT_OF_MEMORY;
+    } else if (!bvh->points_allocation) {
         unsigned char *block = HAIROBB__CAST(unsigned char *, hairobb__malloc_large(hairobb__copy_bytes(refs, bvh->segment_count),
                                                                                       bvh->allocator_user));
         if (!block) return HAIROBB_ERROR_OUT_OF_MEMORY;
@@ -4722,6 +4735,7 @@ HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh)
     if (!bvh) return;
     user = bvh->allocator_user;
     if (bvh->points_allocation) HAIROBB_FREE(bvh->points_allocation, user);
+    if (bvh->leaf_offsets) HAIROBB_FREE(bvh->leaf_offsets, user);
     if (bvh->owned_indices) HAIROBB_FREE(bvh->owned_indices, user);
     if (bvh->time_vertices) HAIROBB_FREE(HAIROBB__CAST(void *, bvh->time_vertices), user);
     if (bvh->node_allocation) HAIROBB_FREE(bvh->node_allocation, user);
@@ -4735,7 +4749,7 @@ HAIROBB_DEF size_t hairobb_memory_bytes(const hairobb_bvh *bvh)
     if (!bvh) return 0;
     return sizeof *bvh + (bvh->node_allocation ? bvh->node_bytes + 64 : 0) + hairobb__leaf_bytes(bvh) +
            (bvh->points_allocation ? hairobb__copy_bytes(bvh->leaf_prim_count, bvh->segment_count) : 0) +
-           (bvh->owned_indices ? sizeof(uint32_t) * bvh->segment_count : 0) + bvh->time_steps * sizeof *bvh->time_vertices;
+           (bvh->leaf_offsets ? sizeof(uint32_t) * bvh->leaf_prim_count : 0) + (bvh->owned_indices ? sizeof(uint32_t) * bvh->segment_count : 0) + bvh->time_steps * sizeof *bvh->time_vertices;
 }
 
 HAIROBB_DEF void hairobb_get_stats(const hairobb_bvh *bvh, hairobb_stats *stats)
@@ -6144,16 +6158,16 @@ HAIROBB__INLINE void hairobb__converted_points(const hairobb_bvh *bvh, const flo
 #define HAIROBB__POINTS_MADE() ((void)0)
 #endif
 
-/* Control points of a moving segment prim at time (in [0, 1]), made into
+/* Control points of a moving segment (its first point at vertex at / 4)
+   at time (in [0, 1]), made into
    scratch: each float lerped between the two steps around it, then
    converted from another basis. Out of line (a cold path beside the
    leaf's), compiled with each pass of the kernels: AVX2 code calling SSE
    code was 2x slower (see tests/check_dispatch_calls.sh). No FMA in any
    pass, so they round alike. */
-HAIROBB__NOINLINE static const float *hairobb__made_moving(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16]);
-static const float *hairobb__made_moving(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
+HAIROBB__NOINLINE static const float *hairobb__made_moving(const hairobb_bvh *bvh, size_t at, float time, float scratch[16]);
+static const float *hairobb__made_moving(const hairobb_bvh *bvh, size_t at, float time, float scratch[16])
 {
-    size_t at = 4 * (size_t)bvh->indices[prim];
     float f = time * (float)(bvh->time_steps - 1), w, lerped[16];
     float *out = bvh->point_basis == HAIROBB_BASIS_BEZIER ? scratch : lerped;
     unsigned k = (unsigned)f;
@@ -6182,18 +6196,25 @@ static const float *hairobb__made_moving(const hairobb_bvh *bvh, uint32_t prim, 
    inline: out of line, or through a pointer to a function per basis,
    they cost more instructions and more time (callgrind and the bench's
    rounds). scratch: room for points made on the fly. */
+HAIROBB__INLINE const float *hairobb__points_at(const hairobb_bvh *bvh, size_t at, float time, float scratch[16]);
 HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
 {
     /* likely: the default's copy, the other paths out of its way */
     if (HAIROBB__LIKELY(bvh->leaf_points != NULL)) return bvh->leaf_points + 16 * (size_t)bvh->point_refs[prim];
-    if (bvh->points_in_place) return bvh->vertices + 4 * (size_t)bvh->indices[prim];
+    return hairobb__points_at(bvh, 4 * (size_t)bvh->indices[prim], time, scratch);
+}
+
+/* The caller's segment whose first point is vertex at / 4 (no copy): in
+   place, or made into scratch. A leaf finds at in leaf_offsets. */
+HAIROBB__INLINE const float *hairobb__points_at(const hairobb_bvh *bvh, size_t at, float time, float scratch[16])
+{
+    if (bvh->points_in_place) return bvh->vertices + at;
     HAIROBB__POINTS_MADE();
     if (!bvh->time_steps) {
-        size_t at = 4 * (size_t)bvh->indices[prim];
         hairobb__converted_points(bvh, bvh->vertices + at, at, scratch);
         return scratch;
     }
-    return hairobb__made_moving(bvh, prim, time, scratch);
+    return hairobb__made_moving(bvh, at, time, scratch);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -6884,8 +6905,10 @@ static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *r
     for (i = 0; i < count; ++i) {
         uint32_t prim = bvh->leaf_prims[first + i];
         float scratch[16];
-        /* the copy: the leaf's points on its own lines, no load waits for prim */
-        const float *cp = copy ? copy + 16 * i : hairobb__segment_points(bvh, prim, rs->time, scratch);
+        /* no load waits for prim: the copy holds the leaf's points on its
+           own lines, or leaf_offsets says where the caller's are */
+        const float *cp = copy ? copy + 16 * i
+                               : hairobb__points_at(bvh, 4 * (size_t)bvh->leaf_offsets[first + i], rs->time, scratch);
         if (HAIROBB__LEAF_VISIT(rs, prim)) continue;
         if (rs->skip_t > 0.0f && hairobb__skipped(rs, prim, cp)) {
             /* this segment alone is tested from skip_t on */
@@ -7062,6 +7085,7 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__joint_at hairobb__joint_at_avx2
 #define hairobb__made_moving hairobb__made_moving_avx2
 #define hairobb__piece_ends hairobb__piece_ends_avx2
+#define hairobb__points_at hairobb__points_at_avx2
 #define hairobb__piece_hit hairobb__piece_hit_avx2
 #define hairobb__ray_points_v4 hairobb__ray_points_v4_avx2
 #define hairobb__ray_row_v4 hairobb__ray_row_v4_avx2

@@ -1028,30 +1028,36 @@ static void failing_allocations(void)
         unsigned char *blob;
         size_t size;
         long fail_at, allocations, bad = 0;
+        int copy;
         memset(&opt, 0, sizeof opt);
         opt.basis = in.basis;
         opt.tangents = in.tangents;
         opt.threads = 1;
         CHECK(hairobb_build(in.vertices, in.vertex_count, in.indices, in.segment_count, &opt, &bvh) == HAIROBB_OK, "build");
         blob = save_of(bvh, &size);
-        test_allocator_init(&a, -1);
         opt.allocator_user = &a;
-        CHECK(load_of(blob, size, &in, &opt, &loaded) == HAIROBB_OK, "counting load");
-        hairobb_free(loaded);
-        allocations = a.calls;
-        CHECK(a.live == 0 && allocations >= 3, "a load makes %ld allocations, %ld live after free", allocations, a.live);
-        for (fail_at = 0; fail_at < allocations; ++fail_at) {
-            hairobb_result r;
-            test_allocator_init(&a, fail_at);
-            loaded = NULL;
-            r = load_of(blob, size, &in, &opt, &loaded);
-            if (r != HAIROBB_ERROR_OUT_OF_MEMORY || loaded || a.live != 0) {
-                printf("allocation %ld failing: %s, %ld live\n", fail_at, hairobb_result_string(r), a.live);
-                ++bad;
-            }
+        /* loads with the copy (the default) and without it (its vertex offsets) */
+        for (copy = 1; copy >= 0; --copy) {
+            opt.bezier_copy = copy ? HAIROBB_AUTO : HAIROBB_OFF;
+            test_allocator_init(&a, -1);
+            CHECK(load_of(blob, size, &in, &opt, &loaded) == HAIROBB_OK, "counting load");
             hairobb_free(loaded);
+            allocations = a.calls;
+            CHECK(a.live == 0 && allocations >= 3, "a load makes %ld allocations, %ld live after free", allocations, a.live);
+            for (bad = 0, fail_at = 0; fail_at < allocations; ++fail_at) {
+                hairobb_result r;
+                test_allocator_init(&a, fail_at);
+                loaded = NULL;
+                r = load_of(blob, size, &in, &opt, &loaded);
+                if (r != HAIROBB_ERROR_OUT_OF_MEMORY || loaded || a.live != 0) {
+                    printf("allocation %ld failing: %s, %ld live\n", fail_at, hairobb_result_string(r), a.live);
+                    ++bad;
+                }
+                hairobb_free(loaded);
+            }
+            CHECK(bad == 0, "%s, copy %s: %ld of %ld failing allocations not out of memory without a leak", b ? "hermite" : "bezier",
+                  copy ? "on" : "off", bad, allocations);
         }
-        CHECK(bad == 0, "%s: %ld of %ld failing allocations not out of memory without a leak", b ? "hermite" : "bezier", bad, allocations);
         /* save_file's one allocation */
         {
             char path[SCRATCH_PATH_SIZE];

@@ -1040,8 +1040,8 @@ static int cancel_progress(void *user, float fraction)
 }
 
 /* Every allocation of a build failing in turn gives OUT_OF_MEMORY, no BVH
-   and no leak: default options, spatial splits (on a scene they clip) and
-   clustering. Cancelling from the progress callback at the first, a middle
+   and no leak: default options, spatial splits (on a scene they clip),
+   clustering, and without the copy (its vertex offsets). Cancelling from the progress callback at the first, a middle
    and the closing call gives CANCELLED, no BVH, no leak and no call after
    the cancelling one; with both a cancel and a failing allocation, the
    result is that of the one that came (either, if both did). */
@@ -1065,11 +1065,13 @@ static void test_allocation_failure(void)
         hairobb_obb_layout layout;
         hairobb_switch spatial, clustering;
         int parallel_for;
+        hairobb_switch copy;
     } configs[] = {
-        {"default options", 0, HAIROBB_OBB_DEFAULT, HAIROBB_AUTO, HAIROBB_AUTO, 0},
-        {"spatial splits", 1, HAIROBB_OBB_COMPRESSED, HAIROBB_ON, HAIROBB_OFF, 0},
-        {"spatial splits and clustering, per-child OBBs", 1, HAIROBB_OBB_PER_CHILD, HAIROBB_ON, HAIROBB_ON, 0},
-        {"default options through a parallel_for", 0, HAIROBB_OBB_DEFAULT, HAIROBB_AUTO, HAIROBB_AUTO, 1},
+        {"default options", 0, HAIROBB_OBB_DEFAULT, HAIROBB_AUTO, HAIROBB_AUTO, 0, HAIROBB_AUTO},
+        {"spatial splits", 1, HAIROBB_OBB_COMPRESSED, HAIROBB_ON, HAIROBB_OFF, 0, HAIROBB_AUTO},
+        {"spatial splits and clustering, per-child OBBs", 1, HAIROBB_OBB_PER_CHILD, HAIROBB_ON, HAIROBB_ON, 0, HAIROBB_AUTO},
+        {"default options through a parallel_for", 0, HAIROBB_OBB_DEFAULT, HAIROBB_AUTO, HAIROBB_AUTO, 1, HAIROBB_AUTO},
+        {"without the copy, through a parallel_for", 0, HAIROBB_OBB_DEFAULT, HAIROBB_AUTO, HAIROBB_AUTO, 1, HAIROBB_OFF},
     };
     static const char *when_names[] = {"the first call", "the first call past 1/2", "the call with 1"};
     float *vertices[2];
@@ -1078,7 +1080,7 @@ static void test_allocation_failure(void)
     int c;
     make_scene(counts[0], &vertices[0], &indices[0]);
     make_crossed_scene(counts[1], &vertices[1], &indices[1]);
-    for (c = 0; c < 4; ++c) {
+    for (c = 0; c < (int)(sizeof configs / sizeof configs[0]); ++c) {
         const char *name = configs[c].name;
         size_t n = counts[configs[c].scene];
         const float *v = vertices[configs[c].scene];
@@ -1096,6 +1098,7 @@ static void test_allocation_failure(void)
         opt.spatial_splits = configs[c].spatial;
         opt.spatial_split_budget = 1.0f;
         opt.clustering = configs[c].clustering;
+        opt.bezier_copy = configs[c].copy;
         opt.allocator_user = &counter;
         opt.parallel_for = configs[c].parallel_for ? for_backwards : NULL;
         parallel_for_calls = 0;
@@ -1205,10 +1208,11 @@ static void test_allocation_failure(void)
    nodes and the BVH's are live at once, as they are copied). */
 static void test_build_memory(void)
 {
-    static const struct { const char *name; hairobb_switch spatial; unsigned threads; } configs[] = {
-        {"default options, 1 thread", HAIROBB_AUTO, 1},
-        {"default options, 2 threads", HAIROBB_AUTO, 2},
-        {"spatial splits, 2 threads", HAIROBB_ON, 2},
+    static const struct { const char *name; hairobb_switch spatial; unsigned threads; hairobb_switch copy; } configs[] = {
+        {"default options, 1 thread", HAIROBB_AUTO, 1, HAIROBB_AUTO},
+        {"default options, 2 threads", HAIROBB_AUTO, 2, HAIROBB_AUTO},
+        {"spatial splits, 2 threads", HAIROBB_ON, 2, HAIROBB_AUTO},
+        {"without the copy, 2 threads", HAIROBB_AUTO, 2, HAIROBB_OFF},
     };
     hair_scene s;
     size_t c;
@@ -1223,6 +1227,7 @@ static void test_build_memory(void)
         opt.allocator_user = &a;
         opt.spatial_splits = configs[c].spatial;
         opt.threads = configs[c].threads;
+        opt.bezier_copy = configs[c].copy;
         r = hairobb_build(s.vertices, s.vertex_count, s.indices, s.segment_count, &opt, &bvh);
         CHECK(r == HAIROBB_OK, "%s: build: %s", configs[c].name, hairobb_result_string(r));
         if (r != HAIROBB_OK) continue;
