@@ -264,19 +264,21 @@
                              segment (8 for other bases, whose indices are
                              kept for hairobb_refit): about 100 bytes a
                              segment in all, against Embree's 115-140. A
-                             leaf visit then reads the BVH's own lines
-                             instead of three dependent loads into the
-                             caller's arrays (leaf entry, index, points), in
-                             whatever order and pages the caller has them:
-                             on 2M-10M segments of fur in a groom
-                             generator's order it traced 1.4-2.0x as fast
-                             as OFF (README). OFF reads the caller's
-                             arrays where they are, converting other bases
-                             each time a segment is read: 32-36 bytes a
-                             segment (nodes and leaves), the mode for hair
-                             that would not fit twice (the 153M-segment
-                             Yeti). Both give the same tree and bit-identical
-                             hits. Moving hair reads the caller's steps.
+                             leaf visit then reads the BVH's own lines,
+                             not the caller's arrays in whatever order
+                             and pages the caller has them: on 2M-10M
+                             segments of fur in a groom generator's order
+                             it traced 1.2-1.8x as fast as OFF (README),
+                             which is why AUTO means ON. OFF keeps each
+                             leaf reference's vertex offset in leaf order
+                             (4 bytes) and reads the caller's points
+                             there, converting other bases each time:
+                             32-40 bytes a segment in all, 0.6-1.0 of
+                             Embree's compact mode's, at 0.7-1.1x its
+                             speed: the mode for hair that would not
+                             fit twice. Both give the same tree and
+                             bit-identical hits. Moving hair reads the
+                             caller's steps, through the offsets too.
      hit_filter, _user       hit_filter(user, ray, hit) for each hit found
                              in [tnear, tfar] (nearer than the best so far
                              for intersect1, any for occluded1), on the

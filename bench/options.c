@@ -93,8 +93,8 @@ static void print_help(void)
            "                      (both: every mode, --builds, --motion, --animate and --save-load included)\n"
            "  --help              this text\n"
            "Embree's peers (in the groups all and embree; ratios stay against embree-r4):\n"
-           "  embree-compact      flat r4 with RTC_SCENE_FLAG_COMPACT: Embree's compact mode, the peer in memory of\n"
-           "                      hairobb (about 40 bytes a segment), and of a compact hairobb mode to come\n"
+           "  embree-compact      flat r4 with RTC_SCENE_FLAG_COMPACT: Embree's compact mode (40-66 bytes a segment),\n"
+           "                      the peer of hairobb without the copy (no-copy)\n"
            "  embree-cycles       Cycles' set-up: flat curves, RTC_SCENE_FLAG_ROBUST, tessellation rate 5; flat\n"
            "                      Catmull-Rom curves on a Catmull-Rom scene (yeti), as Cycles hands Embree its\n"
            "                      hair; on a Bezier scene, flat Bezier curves with the same flags and rate\n");

@@ -54,8 +54,8 @@ const variant all_variants[] = {
     EMBREE_ROW("embree-r4", "Embree flat r4", EMB_FLAT_BEZIER, 4, 0, 1, 1),
     EMBREE_ROW("embree-r8", "Embree flat r8", EMB_FLAT_BEZIER, 8, 0, 1, 1),
     EMBREE_ROW("embree-r16", "Embree flat r16", EMB_FLAT_BEZIER, 16, 0, 1, 1),
-    /* the peers: Embree's compact mode (about 40 bytes a segment: the peer in
-       memory of hairobb's, and of a compact hairobb mode to come), and
+    /* the peers: Embree's compact mode (40-66 bytes a segment: the peer of
+       hairobb without the copy, no-copy), and
        Cycles' set-up (robust traversal, rate 5; Cycles hands Embree
        Catmull-Rom curves, which these rows read on a Catmull-Rom scene, and
        flat Bezier curves on a Bezier scene) */
