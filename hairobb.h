@@ -1379,7 +1379,7 @@ static hairobb_result hairobb__resolve_options(const hairobb_build_options *give
 {
     if (given) *opt = *given; else memset(opt, 0, sizeof *opt);
     if ((unsigned)opt->basis > HAIROBB_BASIS_LINEAR || (opt->basis == HAIROBB_BASIS_HERMITE) != (opt->tangents != NULL) ||
-        (unsigned)opt->simd > HAIROBB_SIMD_NEON || opt->threads > HAIROBB__MAX_THREADS)
+        (unsigned)opt->simd > HAIROBB_SIMD_NEON || opt->threads > HAIROBB__MAX_THREADS || (unsigned)opt->bezier_copy > HAIROBB_OFF)
         return HAIROBB_ERROR_INVALID_ARGUMENT;
     if (purpose == HAIROBB__FOR_LOAD) return (unsigned)opt->verify_hair > HAIROBB_OFF ? HAIROBB_ERROR_INVALID_ARGUMENT : HAIROBB_OK;
     if (opt->max_leaf_size == 0) opt->max_leaf_size = HAIROBB__DEFAULT_MAX_LEAF;

@@ -428,10 +428,10 @@ static void test_invalid_options(const hair_scene *s)
                   "budget %g: %zu leaf references for %zu segments", (double)good_budgets[i], stats.leaf_references, s->segment_count);
         hairobb_free(bvh);
     }
-    for (field = 0; field < 5; ++field) {
+    for (field = 0; field < 6; ++field) {
         /* 7 and 9: the values of the issue; no enum here has that many members */
         static const unsigned bad[] = {7, 9, 100, 0x7fffffffu, 0xffffffffu};
-        static const char *names[] = {"nodes", "obb_layout", "spatial_splits", "clustering", "precision"};
+        static const char *names[] = {"nodes", "obb_layout", "spatial_splits", "clustering", "precision", "bezier_copy"};
         size_t k;
         for (k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
             unsigned value = bad[k];
@@ -442,7 +442,8 @@ static void test_invalid_options(const hair_scene *s)
             case 1: opt.obb_layout = (hairobb_obb_layout)value; break;
             case 2: opt.spatial_splits = (hairobb_switch)value; break;
             case 3: opt.clustering = (hairobb_switch)value; break;
-            default: opt.precision = (hairobb_precision)value; break;
+            case 4: opt.precision = (hairobb_precision)value; break;
+            default: opt.bezier_copy = (hairobb_switch)value; break;
             }
             bvh = (hairobb_bvh *)&opt;
             r = hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, &opt, &bvh);

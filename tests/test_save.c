@@ -958,6 +958,11 @@ static void other_hair(void)
     CHECK(hairobb_load(blob, size, s.vertices, s.vertex_count, s.indices, s.segment_count, &opt, &loaded) == HAIROBB_ERROR_INVALID_ARGUMENT,
           "verify_hair 3");
     memset(&opt, 0, sizeof opt);
+    opt.bezier_copy = (hairobb_switch)3;
+    CHECK(hairobb_load(blob, size, s.vertices, s.vertex_count, s.indices, s.segment_count, &opt, &loaded) == HAIROBB_ERROR_INVALID_ARGUMENT &&
+              loaded == NULL,
+          "bezier_copy 3");
+    memset(&opt, 0, sizeof opt);
     opt.tangents = tangents;
     CHECK(hairobb_load(blob, size, s.vertices, s.vertex_count, s.indices, s.segment_count, &opt, &loaded) == HAIROBB_ERROR_INVALID_ARGUMENT,
           "tangents without Hermite");
