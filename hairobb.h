@@ -1246,7 +1246,7 @@ struct hairobb_bvh {
     uint32_t *point_refs;
     /* without the copy (bezier_copy OFF, moving hair): indices[leaf_prims[i]]
        in leaf order, so that a leaf finds the caller's points with no load
-       waiting for indices[prim] (a dependent miss at scale). NULL with it. */
+       waiting for indices[prim] (a dependent miss at scale). NULL with the copy. */
     uint32_t *leaf_offsets;
     uint32_t *owned_indices;          /* other bases with the copy: the caller's indices, for hairobb_refit */
     hairobb_filter_fn hit_filter;
@@ -4751,7 +4751,8 @@ HAIROBB_DEF size_t hairobb_memory_bytes(const hairobb_bvh *bvh)
     if (!bvh) return 0;
     return sizeof *bvh + (bvh->node_allocation ? bvh->node_bytes + 64 : 0) + hairobb__leaf_bytes(bvh) +
            (bvh->points_allocation ? hairobb__copy_bytes(bvh->leaf_prim_count, bvh->segment_count) : 0) +
-           (bvh->leaf_offsets ? sizeof(uint32_t) * bvh->leaf_prim_count : 0) + (bvh->owned_indices ? sizeof(uint32_t) * bvh->segment_count : 0) + bvh->time_steps * sizeof *bvh->time_vertices;
+           (bvh->leaf_offsets ? sizeof(uint32_t) * bvh->leaf_prim_count : 0) +
+           (bvh->owned_indices ? sizeof(uint32_t) * bvh->segment_count : 0) + bvh->time_steps * sizeof *bvh->time_vertices;
 }
 
 HAIROBB_DEF void hairobb_get_stats(const hairobb_bvh *bvh, hairobb_stats *stats)
@@ -6161,12 +6162,12 @@ HAIROBB__INLINE void hairobb__converted_points(const hairobb_bvh *bvh, const flo
 #endif
 
 /* Control points of a moving segment (its first point at vertex at / 4)
-   at time (in [0, 1]), made into
-   scratch: each float lerped between the two steps around it, then
-   converted from another basis. Out of line (a cold path beside the
-   leaf's), compiled with each pass of the kernels: AVX2 code calling SSE
-   code was 2x slower (see tests/check_dispatch_calls.sh). No FMA in any
-   pass, so they round alike. */
+   at time (in [0, 1]), made into scratch: each float lerped between the
+   two steps around it, then converted from another basis. Out of line
+   (a cold path beside the leaf's), compiled with each pass of the
+   kernels: AVX2 code calling SSE code was 2x slower (see
+   tests/check_dispatch_calls.sh). No FMA in any pass, so they round
+   alike. */
 HAIROBB__NOINLINE static const float *hairobb__made_moving(const hairobb_bvh *bvh, size_t at, float time, float scratch[16]);
 static const float *hairobb__made_moving(const hairobb_bvh *bvh, size_t at, float time, float scratch[16])
 {
@@ -7087,8 +7088,8 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__joint_at hairobb__joint_at_avx2
 #define hairobb__made_moving hairobb__made_moving_avx2
 #define hairobb__piece_ends hairobb__piece_ends_avx2
-#define hairobb__points_at hairobb__points_at_avx2
 #define hairobb__piece_hit hairobb__piece_hit_avx2
+#define hairobb__points_at hairobb__points_at_avx2
 #define hairobb__ray_points_v4 hairobb__ray_points_v4_avx2
 #define hairobb__ray_row_v4 hairobb__ray_row_v4_avx2
 #define hairobb__refine_dip hairobb__refine_dip_avx2
