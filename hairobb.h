@@ -6193,22 +6193,13 @@ static const float *hairobb__made_moving(const hairobb_bvh *bvh, size_t at, floa
     return scratch;
 }
 
-/* The Bezier control points (x y z r, 4 each) of segment prim as traced
-   at time (a ray's; unused by static BVHs): every traversal path reads a
-   segment through here. Static points of another basis are converted
-   inline: out of line, or through a pointer to a function per basis,
-   they cost more instructions and more time (callgrind and the bench's
-   rounds). scratch: room for points made on the fly. */
-HAIROBB__INLINE const float *hairobb__points_at(const hairobb_bvh *bvh, size_t at, float time, float scratch[16]);
-HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
-{
-    /* likely: the default's copy, the other paths out of its way */
-    if (HAIROBB__LIKELY(bvh->leaf_points != NULL)) return bvh->leaf_points + 16 * (size_t)bvh->point_refs[prim];
-    return hairobb__points_at(bvh, 4 * (size_t)bvh->indices[prim], time, scratch);
-}
-
 /* The caller's segment whose first point is vertex at / 4 (no copy): in
-   place, or made into scratch. A leaf finds at in leaf_offsets. */
+   place, or made into scratch at time (a ray's; unused by static BVHs).
+   A leaf finds at in leaf_offsets; reads by segment id, through
+   hairobb__segment_points below. Static points of another basis are
+   converted inline: out of line, or through a pointer to a function per
+   basis, they cost more instructions and more time (callgrind and the
+   bench's rounds). scratch: room for points made on the fly. */
 HAIROBB__INLINE const float *hairobb__points_at(const hairobb_bvh *bvh, size_t at, float time, float scratch[16])
 {
     if (bvh->points_in_place) return bvh->vertices + at;
@@ -6218,6 +6209,17 @@ HAIROBB__INLINE const float *hairobb__points_at(const hairobb_bvh *bvh, size_t a
         return scratch;
     }
     return hairobb__made_moving(bvh, at, time, scratch);
+}
+
+/* The Bezier control points (x y z r, 4 each) of segment prim as traced
+   at time: the copy's, or the caller's through its index. Every read by
+   segment id (hit attributes, joints, secondary rays, refit, save's hash)
+   comes here. */
+HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uint32_t prim, float time, float scratch[16])
+{
+    /* likely: the default's copy, the other paths out of its way */
+    if (HAIROBB__LIKELY(bvh->leaf_points != NULL)) return bvh->leaf_points + 16 * (size_t)bvh->point_refs[prim];
+    return hairobb__points_at(bvh, 4 * (size_t)bvh->indices[prim], time, scratch);
 }
 
 /* ------------------------------------------------------------------------ */

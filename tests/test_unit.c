@@ -1041,8 +1041,9 @@ static int cancel_progress(void *user, float fraction)
 
 /* Every allocation of a build failing in turn gives OUT_OF_MEMORY, no BVH
    and no leak: default options, spatial splits (on a scene they clip),
-   clustering, and without the copy (its vertex offsets). Cancelling from the progress callback at the first, a middle
-   and the closing call gives CANCELLED, no BVH, no leak and no call after
+   clustering, and without the copy (its vertex offsets). Cancelling from
+   the progress callback at the first, a middle and the closing call
+   gives CANCELLED, no BVH, no leak and no call after
    the cancelling one; with both a cancel and a failing allocation, the
    result is that of the one that came (either, if both did). */
 /* A user's parallel_for: the tasks on the calling thread, last first, or
