@@ -274,7 +274,7 @@
                              (4 bytes) and reads the caller's points
                              there, converting other bases each time:
                              32-40 bytes a segment in all, 0.6-1.0 of
-                             Embree's compact mode's, at 0.7-1.1x its
+                             Embree's compact mode's, at 0.7-1.3x its
                              speed: the mode for hair that would not
                              fit twice. Both give the same tree and
                              bit-identical hits. Moving hair reads the
