@@ -771,7 +771,8 @@ HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray
    closer than 2 * its largest radius / |dir|, plus the rounding of org,
    are ignored: the ribbon the ray starts on, whatever way it faces the new
    ray. Every other segment counts from tnear on, however close (contact
-   shadows between hairs stay). from == NULL: the plain functions above. */
+   shadows between hairs stay). from == NULL: the plain functions above.
+   `hit` may point to the same hit as `from` (a path tracer's loop). */
 HAIROBB_DEF int hairobb_intersect1_from(const hairobb_bvh *bvh, const hairobb_hit *from, const hairobb_ray *ray,
                                         hairobb_hit *hit);
 HAIROBB_DEF int hairobb_occluded1_from(const hairobb_bvh *bvh, const hairobb_hit *from, const hairobb_ray *ray);
@@ -7030,10 +7031,13 @@ HAIROBB_DEF int hairobb_intersect1_from(const hairobb_bvh *bvh, const hairobb_hi
                                         hairobb_hit *hit)
 {
     hairobb__ray_state rs;
+    int ready;
     if (!hit) return 0;
+    /* `from` is read (into rs) before *hit is written: the two may be one
+       hit, as a path tracer's loop passes them */
+    ready = bvh && ray && hairobb__ray_setup_from(&rs, bvh, from, ray);
     hit->prim_id = HAIROBB_INVALID_ID;
-    if (!bvh || !ray || !hairobb__ray_setup_from(&rs, bvh, from, ray)) return 0;
-    if (!hairobb__trace(bvh, &rs, 0)) return 0;
+    if (!ready || !hairobb__trace(bvh, &rs, 0)) return 0;
     hairobb__hit_at(bvh, &rs, rs.hit_prim, rs.hit_points, &rs.hit_curve, rs.hit_u, rs.tfar, hit);
     return 1;
 }

@@ -118,7 +118,7 @@ static void test_scene(const char *name, hair_scene *s, int side)
     hairobb_bvh *bvh = NULL;
     ref_scene *reference = ref_build(s->vertices, s->vertex_count, s->indices, s->segment_count);
     size_t rays = (size_t)side * side, i, secondary = 0, plain_self = 0, from_self = 0, disagree = 0, occluded_disagree = 0;
-    size_t blocked = 0, at_band = 0;
+    size_t blocked = 0, at_band = 0, aliased_differ = 0;
     float *org = (float *)malloc(3 * sizeof(float) * rays), *dir = (float *)malloc(3 * sizeof(float) * rays);
     scene_rng rng;
     scene_rng_seed(&rng, 99);
@@ -148,6 +148,11 @@ static void test_scene(const char *name, hair_scene *s, int side)
             if (hairobb_intersect1(bvh, &ray, &plain) && joined(s, hit.prim_id, plain.prim_id) && plain.t < band) ++plain_self;
             got = hairobb_intersect1_from(bvh, &hit, &ray, &from);
             if (got && joined(s, hit.prim_id, from.prim_id) && from.t < band) ++from_self;
+            {   /* the output written over `from`, as a path tracer's loop does */
+                hairobb_hit aliased = hit;
+                int got_aliased = hairobb_intersect1_from(bvh, &aliased, &ray, &aliased);
+                aliased_differ += got_aliased != got || (got && memcmp(&aliased, &from, sizeof from) != 0);
+            }
             expected = reference_from(&u, hit.prim_id, ray.org, ray.dir, &want, &near_band);
             if (near_band) { ++at_band; continue; }
             blocked += (size_t)expected;
@@ -167,6 +172,8 @@ static void test_scene(const char *name, hair_scene *s, int side)
     CHECK(secondary > 1000 && plain_self > secondary / 20, "%s: the plain query re-hits the ribbon it leaves (%zu of %zu): the rule matters",
           name, plain_self, secondary);
     CHECK(from_self == 0, "%s: %zu secondary rays re-hit the ribbon they leave", name, from_self);
+    CHECK(aliased_differ == 0, "%s: intersect1_from with the hit written over `from` differs on %zu of %zu rays", name,
+          aliased_differ, secondary);
     CHECK(disagree == 0 && occluded_disagree == 0, "%s: %zu (occluded %zu) of %zu secondary rays disagree with the reference", name,
           disagree, occluded_disagree, secondary);
     CHECK(at_band <= secondary / 1000, "%s: %zu rays on the band's edge", name, at_band);

@@ -72,7 +72,7 @@ static void compare_paths(const hair_scene *s, const hairobb_build_options *opti
     int *occluded_plain = (int *)malloc(sizeof(int) * n), *occluded_other = (int *)malloc(sizeof(int) * n);
     int k;
     hairobb_simd used = HAIROBB_SIMD_AUTO;
-    size_t visits[4];
+    size_t visits[4], aliased_differ = 0;
     /* points read where they are, or made on the fly by the path's own code */
     int made = options->time_steps >= 2 || (options->basis != HAIROBB_BASIS_BEZIER && options->bezier_copy == HAIROBB_OFF);
 #if defined(__aarch64__)
@@ -105,9 +105,12 @@ static void compare_paths(const hair_scene *s, const hairobb_build_options *opti
         rays[i].tfar = INFINITY;
         rays[i].time = options->time_steps >= 2 ? ray_time(i, options->time_steps, &rng) : 0.0f;
     }
-    CHECK(trace_plain(s->vertices, s->vertex_count, s->indices, s->segment_count, options, rays, n, plain, occluded_plain, &used, visits),
+    CHECK(trace_plain(s->vertices, s->vertex_count, s->indices, s->segment_count, options, rays, n, plain, occluded_plain, &used, visits,
+                      &aliased_differ),
           "%s %s: plain C build", s->name, what);
     CHECK(used == HAIROBB_SIMD_NONE, "%s %s: plain C build traced with %s", s->name, what, path_name(used));
+    CHECK(aliased_differ == 0, "%s %s: plain C: intersect1_from with the hit written over `from` differs on %zu rays", s->name,
+          what, aliased_differ);
     for (i = 0; i < n; ++i) {
         hits += plain[i].prim_id != HAIROBB_INVALID_ID;
         outside_hits += !(rays[i].time >= 0.0f && rays[i].time <= 1.0f) && (plain[i].prim_id != HAIROBB_INVALID_ID || occluded_plain[i]);
@@ -121,8 +124,10 @@ static void compare_paths(const hair_scene *s, const hairobb_build_options *opti
         asked.simd = paths[k].request;
         used = HAIROBB_SIMD_AUTO;
         CHECK(paths[k].trace(s->vertices, s->vertex_count, s->indices, s->segment_count, &asked, rays, n, other,
-                             occluded_other, &used, visits),
+                             occluded_other, &used, visits, &aliased_differ),
               "%s %s: %s build", s->name, what, paths[k].name);
+        CHECK(aliased_differ == 0, "%s %s: %s: intersect1_from with the hit written over `from` differs on %zu rays", s->name,
+              what, paths[k].name, aliased_differ);
         CHECK(used == paths[k].expect, "%s %s: %s traced with %s", s->name, what, paths[k].name, path_name(used));
         /* the kernels that ran are the ones reported */
         CHECK(visits[used == HAIROBB_SIMD_AVX2] > 0 && visits[used != HAIROBB_SIMD_AVX2] == 0,
