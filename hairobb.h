@@ -188,7 +188,12 @@
      within 2 radii (Embree drops every hit with t <= 2 r / |dir|, other
      hairs included; here other hairs in contact still cast shadows).
      An any-hit filter (options.hit_filter) sees each hit before it is
-     taken: transparent hair, shadow rays through opacity.
+     taken: transparent hair, shadow rays through opacity. Which candidate
+     hits it is shown, and in what order, depends on the traversal's order
+     (nearest first for intersect1, none for occluded1), which may differ
+     between SIMD paths and versions; the hit a call returns does not. A
+     filter that is a pure function of its hit gives the same answers on
+     every path.
 
 
    7. BUILD OPTIONS (hairobb_build_options; a zero-initialised struct = defaults)
@@ -5709,6 +5714,9 @@ typedef struct hairobb__ray_state {
 /* Slab distances carry rounding from the ray transform; widening the far end
    by a few ulps keeps the test conservative (after Ize 2013). */
 #define HAIROBB__FAR_SCALE (1.0f + 4.0f * FLT_EPSILON)
+/* A segment's cull against the planes z = tnear, tfar is widened by this
+   much of its largest |z| (hairobb__intersect_segment). */
+#define HAIROBB__Z_SLACK (1.0f / 65536.0f)
 
 /* org and dir given in the slab frame; zero direction components become
    +-tiny, so 1/dir stays finite for rays parallel to a slab. The upper
@@ -6378,6 +6386,20 @@ HAIROBB__INLINE int hairobb__intersect_obb_node(const hairobb__obb_node *node, c
 
 static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint64_t ref, int any_hit);
 
+/* A child pushed on the stack waits at least one node test: its first lines
+   (a node's planes; a leaf's first copied segment) are asked for now. */
+HAIROBB__INLINE void hairobb__prefetch_child(const hairobb_bvh *bvh, uint64_t ref)
+{
+    if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_LEAF) {
+        if (bvh->leaf_points) HAIROBB__PREFETCH(bvh->leaf_points + 16 * (size_t)(ref >> 8));
+    } else {
+        const unsigned char *node = HAIROBB__NODE_AT(bvh->nodes, ref);
+        HAIROBB__PREFETCH(node);
+        HAIROBB__PREFETCH(node + 64);
+        HAIROBB__PREFETCH(node + 128);
+    }
+}
+
 /* Nearest-first traversal; any_hit stops at the first hit. A node with
    several hit children pushes them all, sorted so that the nearest is on
    top, and goes on with that one. */
@@ -6444,11 +6466,24 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
             i = hairobb__lowest_bit((unsigned)bits);
             bits &= bits - 1;
             if (!bits) { ref = child[i]; continue; }   /* one hit: the common case */
+            if (any_hit) {   /* any hit ends the ray: no order is better than another, no sort */
+                ref = child[i];
+                do {
+                    int j = hairobb__lowest_bit((unsigned)bits);
+                    bits &= bits - 1;
+                    stack_ref[sp] = child[j];
+                    stack_dist[sp] = dist[j];
+                    hairobb__prefetch_child(bvh, child[j]);
+                    ++sp;
+                } while (bits);
+                continue;
+            }
             if (!(bits & (bits - 1))) {                 /* two: the farther one waits */
                 int j = hairobb__lowest_bit((unsigned)bits);
                 int i_first = dist[i] < dist[j];        /* as the sort below orders them */
                 stack_ref[sp] = i_first ? child[j] : child[i];
                 stack_dist[sp] = i_first ? dist[j] : dist[i];
+                hairobb__prefetch_child(bvh, stack_ref[sp]);
                 ++sp;
                 ref = i_first ? child[i] : child[j];
                 continue;
@@ -6468,15 +6503,19 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
                 }
                 stack_ref[i] = child[j];
                 stack_dist[i] = d;
+                hairobb__prefetch_child(bvh, child[j]);
                 ++sp;
             } while (bits);
             ref = stack_ref[--sp];
             continue;
         }
+        /* widened as the node tests widen tfar: a child pushed before tfar
+           shrank is dropped only where its test would now cull it, so the
+           hits found do not depend on the order children are visited in */
         do {
             if (sp == 0) return found;
             --sp;
-        } while (stack_dist[sp] > rs->tfar);
+        } while (stack_dist[sp] > rs->tfar * HAIROBB__FAR_SCALE);
         ref = stack_ref[sp];
     }
 }
@@ -6868,18 +6907,28 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
        lines parallel to the chord P0 P3 at distance max_r, widened by the
        rounding of the curve's points as the exact test evaluates them:
        |n.P2(u)| <= |n| |P2(u)| <= |n| r(u) on the ribbon, and n.P2(u) lies
-       between the extreme n.Pi. */
+       between the extreme n.Pi. The planes are widened too, by more than
+       the exact test's rounding of t (its power form, Horner's rule and the
+       scale by 1/|dir|: tens of ulps of the largest |z|; HAIROBB__Z_SLACK
+       is 2^-16): tfar shrinks in the order the traversal finds hits, and a
+       segment whose hit the exact test accepts at t <= tfar must never be
+       culled here, whatever that order (SIMD paths may visit nodes in
+       another order than plain C). */
     z = hairobb__ray_row_v4(rs, 2, qx, qy, qz);
     hairobb__v4_store(c.x, x);
     hairobb__v4_store(c.y, y);
     {
         float nx = c.y[0] - c.y[3], ny = c.x[3] - c.x[0], limit;
+        float slack = hairobb__v4_hmax(hairobb__v4_abs(z)) * HAIROBB__Z_SLACK;
+        float z_near = rs->tnear * rs->dir_length, z_far = rs->tfar * rs->dir_length;
         hairobb__v4 d;
+        z_near -= fabsf(z_near) * (8.0f * FLT_EPSILON) + slack;
+        z_far += fabsf(z_far) * (8.0f * FLT_EPSILON) + slack;
         magnitude = hairobb__v4_hmax(hairobb__v4_max(hairobb__v4_abs(x), hairobb__v4_abs(y)));
         limit = sqrtf(nx * nx + ny * ny) * (max_r + magnitude * (16.0f * FLT_EPSILON));
         d = hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(nx), x), hairobb__v4_mul(hairobb__v4_set1(ny), y));
-        inside = (hairobb__v4_le_bits(hairobb__v4_set1(rs->tnear * rs->dir_length), z) + 15) &
-                 (hairobb__v4_le_bits(z, hairobb__v4_set1(rs->tfar * rs->dir_length)) + 15) &
+        inside = (hairobb__v4_le_bits(hairobb__v4_set1(z_near), z) + 15) &
+                 (hairobb__v4_le_bits(z, hairobb__v4_set1(z_far)) + 15) &
                  (hairobb__v4_le_bits(d, hairobb__v4_set1(limit)) + 15) & (hairobb__v4_le_bits(hairobb__v4_set1(-limit), d) + 15) & 16;
         if (!inside) return 0;   /* both tests, one branch */
     }
@@ -7096,6 +7145,7 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__piece_ends hairobb__piece_ends_avx2
 #define hairobb__piece_hit hairobb__piece_hit_avx2
 #define hairobb__points_at hairobb__points_at_avx2
+#define hairobb__prefetch_child hairobb__prefetch_child_avx2
 #define hairobb__ray_points_v4 hairobb__ray_points_v4_avx2
 #define hairobb__ray_row_v4 hairobb__ray_row_v4_avx2
 #define hairobb__refine_dip hairobb__refine_dip_avx2
