@@ -6400,6 +6400,42 @@ HAIROBB__INLINE void hairobb__prefetch_child(const hairobb_bvh *bvh, uint64_t re
     }
 }
 
+/* The node types other than the default layout's (per-child compressed
+   OBB, AABB) and leaves: out of line, so that the loop tests its three
+   common types with two well-predicted compares instead of a jump table. */
+static HAIROBB__NOINLINE int hairobb__intersect_other_node(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint64_t ref,
+                                                           float dist[HAIROBB__W], const uint64_t **child)
+{
+    unsigned type = HAIROBB__REF_TYPE(ref);
+    const void *node;
+    if (type == HAIROBB__REF_EMPTY) {
+        *child = NULL;
+        return 0;
+    }
+    node = HAIROBB__NODE_AT(bvh->nodes, ref);
+    if (type == HAIROBB__REF_QAABB || type == HAIROBB__REF_QOBB) {
+        *child = HAIROBB__CAST(const hairobb__compressed_node *, node)->child;
+        return hairobb__intersect_compressed_node(HAIROBB__CAST(const hairobb__compressed_node *, node), type == HAIROBB__REF_QOBB,
+                                                  NULL, rs, dist);
+    }
+    if (type == HAIROBB__REF_ROTATED) {
+        *child = HAIROBB__CAST(const hairobb__rotated_node *, node)->child;
+        return hairobb__intersect_rotated_node(HAIROBB__CAST(const hairobb__rotated_node *, node), rs, dist);
+    }
+    if (type == HAIROBB__REF_QOBB_PER_CHILD_MB) {   /* moving hair's nodes: the planes at time 1 follow */
+        *child = HAIROBB__CAST(const hairobb__compressed_obb_node *, node)->child;
+        return hairobb__intersect_compressed_obb_node(HAIROBB__CAST(const hairobb__compressed_obb_node *, node),
+                                                      HAIROBB__CAST(const signed char *, node) + sizeof(hairobb__compressed_obb_node), rs, dist);
+    }
+    if (type == HAIROBB__REF_QAABB_MB || type == HAIROBB__REF_QOBB_MB) {
+        *child = HAIROBB__CAST(const hairobb__compressed_node *, node)->child;
+        return hairobb__intersect_compressed_node(HAIROBB__CAST(const hairobb__compressed_node *, node), type == HAIROBB__REF_QOBB_MB,
+                                                  HAIROBB__CAST(const signed char *, node) + sizeof(hairobb__compressed_node), rs, dist);
+    }
+    *child = HAIROBB__CAST(const hairobb__obb_node *, node)->child;
+    return hairobb__intersect_obb_node(HAIROBB__CAST(const hairobb__obb_node *, node), rs, dist);
+}
+
 /* Nearest-first traversal; any_hit stops at the first hit. A node with
    several hit children pushes them all, sorted so that the nearest is on
    top, and goes on with that one. */
@@ -6411,7 +6447,7 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
     uint64_t ref = bvh->root;
     rs->any_hit = any_hit;
     for (;;) {
-        /* the default layout's types first: a compare each */
+        /* the default layout's types and leaves first, a compare each; the rest out of line */
         unsigned type = HAIROBB__REF_TYPE(ref);
         const void *node;   /* set for inner nodes only: a one-leaf tree has no node memory */
         const uint64_t *child;
@@ -6421,10 +6457,6 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
             node = HAIROBB__NODE_AT(bvh->nodes, ref);
             bits = hairobb__intersect_compressed_obb_node(HAIROBB__CAST(const hairobb__compressed_obb_node *, node), NULL, rs, dist);
             child = HAIROBB__CAST(const hairobb__compressed_obb_node *, node)->child;
-        } else if (type == HAIROBB__REF_AABB) {
-            const hairobb__aabb_node *aabb = HAIROBB__CAST(const hairobb__aabb_node *, (const void *)HAIROBB__NODE_AT(bvh->nodes, ref));
-            bits = hairobb__intersect_boxes(aabb->lower[0], &rs->world, rs, dist);
-            child = aabb->child;
         } else if (type == HAIROBB__REF_LEAF) {
             HAIROBB__COUNT(leaf);
             if (hairobb__intersect_leaf(bvh, rs, ref, any_hit)) {
@@ -6433,32 +6465,12 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
             }
             bits = 0;
             child = NULL;
-        } else if (type == HAIROBB__REF_EMPTY) {
-            bits = 0;
-            child = NULL;
-        } else if (type == HAIROBB__REF_QAABB || type == HAIROBB__REF_QOBB) {
-            node = HAIROBB__NODE_AT(bvh->nodes, ref);
-            bits = hairobb__intersect_compressed_node(HAIROBB__CAST(const hairobb__compressed_node *, node),
-                                                      type == HAIROBB__REF_QOBB, NULL, rs, dist);
-            child = HAIROBB__CAST(const hairobb__compressed_node *, node)->child;
-        } else if (type == HAIROBB__REF_ROTATED) {
-            node = HAIROBB__NODE_AT(bvh->nodes, ref);
-            bits = hairobb__intersect_rotated_node(HAIROBB__CAST(const hairobb__rotated_node *, node), rs, dist);
-            child = HAIROBB__CAST(const hairobb__rotated_node *, node)->child;
-        } else if (type == HAIROBB__REF_QOBB_PER_CHILD_MB) {   /* moving hair's nodes: the planes at time 1 follow */
-            node = HAIROBB__NODE_AT(bvh->nodes, ref);
-            bits = hairobb__intersect_compressed_obb_node(HAIROBB__CAST(const hairobb__compressed_obb_node *, node),
-                                                          HAIROBB__CAST(const signed char *, node) + sizeof(hairobb__compressed_obb_node), rs, dist);
-            child = HAIROBB__CAST(const hairobb__compressed_obb_node *, node)->child;
-        } else if (type == HAIROBB__REF_QAABB_MB || type == HAIROBB__REF_QOBB_MB) {
-            node = HAIROBB__NODE_AT(bvh->nodes, ref);
-            bits = hairobb__intersect_compressed_node(HAIROBB__CAST(const hairobb__compressed_node *, node), type == HAIROBB__REF_QOBB_MB,
-                                                      HAIROBB__CAST(const signed char *, node) + sizeof(hairobb__compressed_node), rs, dist);
-            child = HAIROBB__CAST(const hairobb__compressed_node *, node)->child;
+        } else if (type == HAIROBB__REF_AABB) {
+            const hairobb__aabb_node *aabb = HAIROBB__CAST(const hairobb__aabb_node *, (const void *)HAIROBB__NODE_AT(bvh->nodes, ref));
+            bits = hairobb__intersect_boxes(aabb->lower[0], &rs->world, rs, dist);
+            child = aabb->child;
         } else {
-            node = HAIROBB__NODE_AT(bvh->nodes, ref);
-            bits = hairobb__intersect_obb_node(HAIROBB__CAST(const hairobb__obb_node *, node), rs, dist);
-            child = HAIROBB__CAST(const hairobb__obb_node *, node)->child;
+            bits = hairobb__intersect_other_node(bvh, rs, ref, dist, &child);
         }
         if (child) HAIROBB__COUNT(node);
         if (bits) {
@@ -7138,6 +7150,7 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__intersect_curve hairobb__intersect_curve_avx2
 #define hairobb__intersect_leaf hairobb__intersect_leaf_avx2
 #define hairobb__intersect_obb_node hairobb__intersect_obb_node_avx2
+#define hairobb__intersect_other_node hairobb__intersect_other_node_avx2
 #define hairobb__intersect_rotated_node hairobb__intersect_rotated_node_avx2
 #define hairobb__intersect_segment hairobb__intersect_segment_avx2
 #define hairobb__joint_at hairobb__joint_at_avx2
