@@ -41,7 +41,7 @@ static void print_help(void)
            "                        copy: on Bezier scenes other curves through the same points),\n"
            "                        b-spline, b-spline-copy (the same for the uniform B-spline basis)\n"
            "                      Embree: embree-r4 (flat, rate 4: Embree's default, the baseline of every ratio),\n"
-           "                        embree-r8, embree-r16 (flat), embree-round, and the peers\n"
+           "                        embree-r8, embree-r16 (flat), embree-round, embree-avx2, and the peers\n"
            "                        embree-compact and embree-cycles (below)\n"
            "                      groups: all, hairobb, embree, precision, ablation, bases, scale (default, embree-r4,\n"
            "                        embree-compact), yeti (catmull-rom: hairobb C-R without the Bezier copy,\n"
@@ -97,7 +97,9 @@ static void print_help(void)
            "                      the peer of hairobb without the copy (no-copy)\n"
            "  embree-cycles       Cycles' set-up: flat curves, RTC_SCENE_FLAG_ROBUST, tessellation rate 5; flat\n"
            "                      Catmull-Rom curves on a Catmull-Rom scene (yeti), as Cycles hands Embree its\n"
-           "                      hair; on a Bezier scene, flat Bezier curves with the same flags and rate\n");
+           "                      hair; on a Bezier scene, flat Bezier curves with the same flags and rate\n"
+           "  embree-avx2         flat r4 on a device limited to Embree's AVX2 kernels (isa=avx2): where the CPU\n"
+           "                      has AVX-512, what Embree's speed owes to it\n");
 }
 
 /* Parses a count with an optional k or M suffix; 0 on success. */

@@ -62,6 +62,8 @@ const variant all_variants[] = {
     EMBREE_ROW("embree-compact", "Embree compact r4", EMB_FLAT_BEZIER, 4, RTC_SCENE_FLAG_COMPACT, 1, 0),
     EMBREE_ROW("embree-cycles", "Embree Cycles r5", EMB_FLAT_BEZIER, 5, RTC_SCENE_FLAG_ROBUST, 1, 0),
     EMBREE_ROW("embree-round", "Embree round *", EMB_ROUND_BEZIER, 0, 0, 0, 0),
+    /* Embree's default limited to its AVX2 kernels (where the CPU has AVX-512) */
+    EMBREE_ROW("embree-avx2", "Embree r4 AVX2 only", EMB_FLAT_BEZIER, 4, EMB_FLAG_ISA_AVX2, 1, 0),
 };
 
 /* VARIANT_COUNT (bench.h) sizes the result arrays: a row added above raises it */
@@ -71,10 +73,10 @@ typedef char variant_table_has_VARIANT_COUNT_rows[sizeof all_variants / sizeof a
 static const struct { const char *name, *members; } variant_groups[] = {
     {"all", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
             "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2,no-copy,embree-r4,embree-r8,embree-r16,"
-            "embree-compact,embree-cycles,embree-round"},
+            "embree-compact,embree-cycles,embree-round,embree-avx2"},
     {"hairobb", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
                 "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2,no-copy"},
-    {"embree", "embree-r4,embree-r8,embree-r16,embree-compact,embree-cycles,embree-round"},
+    {"embree", "embree-r4,embree-r8,embree-r16,embree-compact,embree-cycles,embree-round,embree-avx2"},
     {"precision", "default,exact4,exact16,pieces4,pieces8,pieces16"},
     {"ablation", "aabb,obb,mixed-uncompressed,spatial,spatial-compressed,spatial-compressed-cluster,shared,compressed-shared,default"},
     {"mixed", "default"},

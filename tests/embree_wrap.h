@@ -21,6 +21,7 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "scenes.h" /* scene_now */
 
@@ -83,6 +84,10 @@ static inline void emb_free(emb_scene *e)
     free(e);
 }
 
+/* Or'ed into scene_flags, not passed to Embree: the device limited to its
+   AVX2 kernels ("isa=avx2"), to tell its AVX-512 from its design. */
+#define EMB_FLAG_ISA_AVX2 (1u << 30)
+
 /* emb_build_curves and emb_build_curves_motion: vertex buffer k (slot k)
    shares time_vertices[k], k < time_steps; time_steps >= 2 sets the
    geometry's time step count (motion blur), 1 builds static curves;
@@ -114,10 +119,14 @@ static inline emb_scene *emb__build_curve_steps(const float *const *time_vertice
     emb_scene *e = (emb_scene *)calloc(1, sizeof *e);
     if (!e)
         return NULL;
-    char config[32];
+    char config[48] = "";
     if (threads > 0)
         snprintf(config, sizeof config, "threads=%d", threads);
-    e->device = rtcNewDevice(threads > 0 ? config : NULL);
+    if (scene_flags & EMB_FLAG_ISA_AVX2) {   /* not a scene flag: the device's ISA */
+        strncat(config, config[0] ? ",isa=avx2" : "isa=avx2", sizeof config - strlen(config) - 1);
+        scene_flags &= ~EMB_FLAG_ISA_AVX2;
+    }
+    e->device = rtcNewDevice(config[0] ? config : NULL);
     if (!e->device) {
         /* no device to call back yet: ask for the error directly */
         fprintf(stderr, "embree error %d: rtcNewDevice failed\n", (int)rtcGetDeviceError(NULL));
