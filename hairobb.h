@@ -6507,14 +6507,21 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
             }
             i = hairobb__lowest_bit((unsigned)bits);
             bits &= bits - 1;
-            if (any_hit) {   /* any hit ends the ray: no order is better than another, no sort */
+            if (any_hit) {
+                /* any hit ends the ray: the nearest child goes first (on
+                   crossing hair unsorted order cost a fifth of the shadow
+                   rays' speed), the others wait unsorted */
+                float nearest = dist[i];
                 ref = child[i];
                 do {
                     int j = hairobb__lowest_bit((unsigned)bits);
+                    int nearer = dist[j] < nearest;
                     bits &= bits - 1;
-                    stack_ref[sp] = child[j];
-                    stack_dist[sp] = dist[j];
-                    hairobb__prefetch_child(bvh, child[j]);
+                    stack_ref[sp] = nearer ? ref : child[j];
+                    stack_dist[sp] = nearer ? nearest : dist[j];
+                    hairobb__prefetch_child(bvh, stack_ref[sp]);
+                    ref = nearer ? child[j] : ref;
+                    nearest = nearer ? dist[j] : nearest;
                     ++sp;
                 } while (bits);
                 continue;
