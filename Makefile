@@ -39,7 +39,7 @@ FUZZCC    = clang
 FUZZ      = -std=c99 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -ffp-contract=off -I.
 FUZZ_SECONDS ?= 1800
 
-.PHONY: all test check deps compile-matrix bench profile examples clean fuzz tree-hashes
+.PHONY: all test check deps compile-matrix bench profile ab examples clean fuzz tree-hashes
 all: $(TESTS) $(SANITIZED) $(B)/bench examples
 
 deps:
@@ -247,6 +247,13 @@ bench: $(B)/bench
 # fixed addresses for addr2line
 profile: $(B)/bench_profile $(B)/bench_counted
 	sh bench/profile.sh $(PROFILE)
+
+# the working tree's hairobb.h against another commit's (AB_BASE, default
+# HEAD), built into one program and timed in alternating passes over the
+# same rays (bench/ab.c; AB="..." adds its options)
+AB_BASE ?= HEAD
+ab: | $(B)
+	sh bench/ab.sh $(AB_BASE) $(AB)
 
 examples: $(B)/minimal $(B)/render $(B)/embree_swap
 

@@ -1,0 +1,55 @@
+/* ab_copy.c - one copy of hairobb for bench/ab.c, compiled twice: once
+   from the version under test and once from the base version
+   (-DAB_HEADER, -DAB_NAME(x) gives each copy's names). HAIROBB_STATIC
+   keeps the two implementations apart in one program. */
+#define _POSIX_C_SOURCE 200809L
+#define HAIROBB_STATIC
+#define HAIROBB_IMPLEMENTATION
+#include AB_HEADER
+#include "ab.h"
+
+void *AB_NAME(build)(const hair_scene *s)
+{
+    hairobb_bvh *bvh = NULL;
+    return hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, NULL, &bvh) == HAIROBB_OK ? bvh : NULL;
+}
+
+void AB_NAME(free)(void *bvh) { hairobb_free((hairobb_bvh *)bvh); }
+
+uint64_t AB_NAME(trace)(void *bvh, const ab_rays *r, ab_hit *hits)
+{
+    uint64_t sum = 0;
+    size_t i;
+    for (i = 0; i < r->count; ++i) {
+        hairobb_ray ray;
+        hairobb_hit hit, from;
+        int got;
+        memcpy(ray.org, r->org + 3 * i, sizeof ray.org);
+        memcpy(ray.dir, r->dir + 3 * i, sizeof ray.dir);
+        ray.tnear = 0.0f;
+        ray.tfar = INFINITY;
+        ray.time = 0.0f;
+        if (r->kind == AB_PRIMARY) {
+            got = hairobb_intersect1((hairobb_bvh *)bvh, &ray, &hit);
+            if (hits) {   /* the secondary rays leave these hits: the two copies find the same ones */
+                hits[i].prim_id = hit.prim_id;
+                hits[i].t = hit.t;
+            }
+        } else {
+            from.prim_id = hits[i].prim_id;   /* only prim_id is read of `from` */
+            from.t = hits[i].t;
+            got = r->kind == AB_SHADOW ? hairobb_occluded1_from((hairobb_bvh *)bvh, &from, &ray)
+                                       : hairobb_intersect1_from((hairobb_bvh *)bvh, &from, &ray, &hit);
+        }
+        /* every bit of the answer enters the sum, so that copies that
+           disagree on any hit are caught */
+        if (got && r->kind != AB_SHADOW) {
+            uint32_t bits;
+            memcpy(&bits, &hit.t, sizeof bits);
+            sum = sum * 1099511628211ull + hit.prim_id * 31ull + bits;
+        } else {
+            sum = sum * 1099511628211ull + (uint64_t)got;
+        }
+    }
+    return sum;
+}
