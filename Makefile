@@ -25,7 +25,7 @@ QUICK  = $(B)/test_options $(B)/test_conservative $(if $(X86),$(B)/test_simd $(B
          $(B)/test_save $(B)/test_motion
 CHECK_TESTS = $(QUICK) $(B)/check_test_secondary
 # `make test`: the quick tier's programs and those needing Embree (and furBall_A)
-TESTS = $(QUICK) $(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_scenes $(B)/test_threads $(B)/test_bases
+TESTS = $(QUICK) $(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_scenes $(B)/test_threads $(B)/test_bases $(B)/test_round
 # the same tests again under AddressSanitizer + UndefinedBehaviorSanitizer
 # (any report aborts the test), the threads test under ThreadSanitizer, and
 # the fuzzers (clang); named first, as the longest, since the tests run two
@@ -50,7 +50,8 @@ $(B):
 
 # ---- Test programs ---------------------------------------------------------
 # What each checks (the comment at the top of its source says more):
-#   test_reference     the double-precision reference intersector itself
+#   test_reference     the double-precision reference intersectors themselves
+#                      (the ribbon's, and the tube's: tests/ref_tube.h)
 #   test_unit          white-box: frames, hair space, node bounds, traversal,
 #                      bad input, failing allocations, cancelling
 #   test_options       every combination of build options against the reference
@@ -75,11 +76,13 @@ $(B):
 #   test_bases         curve bases against Embree's flat curves of each basis
 #                      and the reference
 #   test_scenes        the tests' scenes, .hair loader and Embree wrapper
+#   test_round         round curves: the tube reference (tests/ref_tube.h)
+#                      against Embree's round curves on the same rays
 # A second build of one source is named by what differs: _w4/_w8 the node
 # width, check_ without Embree (make check), asan_/tsan_ under a sanitizer.
 # Every test program depends on the header and every shared test header;
 # its flags beyond the build's own are TEST_FLAGS_<name>.
-TEST_HEADERS = hairobb.h tests/check.h tests/test_alloc.h tests/test_data.h tests/scratch.h tests/reference.h \
+TEST_HEADERS = hairobb.h tests/check.h tests/test_alloc.h tests/test_data.h tests/scratch.h tests/reference.h tests/ref_tube.h \
                tests/ref_bases.h tests/scenes.h tests/embree_wrap.h
 TEST_FLAGS_test_unit            = -DHAIROBB_NODE_WIDTH=4
 TEST_FLAGS_test_unit_w8         = -DHAIROBB_NODE_WIDTH=8
@@ -102,7 +105,7 @@ $(B)/test_refit_w4: tests/test_refit.c
 $(B)/test_simd_w8: tests/test_simd.c
 $(B)/check_test_secondary: tests/test_secondary.c
 # those comparing with Embree
-$(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_bases $(B)/test_scenes: $(B)/%: tests/%.c $(TEST_HEADERS) | $(B) deps
+$(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_bases $(B)/test_scenes $(B)/test_round: $(B)/%: tests/%.c $(TEST_HEADERS) | $(B) deps
 	$(TEST_CC) $(EMBREE) $(LIBS)
 
 # under AddressSanitizer + UndefinedBehaviorSanitizer, and ThreadSanitizer:

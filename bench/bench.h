@@ -137,7 +137,7 @@ typedef struct variant {
     unsigned curve_pieces;
     hairobb_switch spatial_splits, clustering;
     int embree_type, embree_rate; /* rate 0 = Embree's default */
-    /* Embree's round curves are swept spheres, not the reference's ribbon:
+    /* Embree's round curves are a swept circle (a tube), not the reference's ribbon:
        their "errors" measure the difference of surfaces, not accuracy. */
     int accuracy_comparable;
     int on_chart;        /* a point of the run time against error chart */

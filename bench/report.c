@@ -317,7 +317,7 @@ void print_accuracy_table(const workload *w, const scene_result *sr, const int s
             any_informative |= all_variants[i].lib == LIB_EMBREE ? 1 : 2;
     }
     if (any_informative & 1)
-        printf("* round curves are swept spheres, not the reference's flat ribbon: informative, not comparable\n");
+        printf("* round curves are a swept circle (a tube), not the reference's flat ribbon: informative, not comparable\n");
     if (any_informative & 2)
         printf("* the C-R rows read this scene's Bezier points as Catmull-Rom points: other curves, not comparable\n");
 }

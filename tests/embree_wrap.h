@@ -27,13 +27,13 @@
 
 enum {
     EMB_FLAT_BEZIER = 0,  /* RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE: ray-facing ribbon */
-    EMB_ROUND_BEZIER = 1, /* RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE: swept sphere */
+    EMB_ROUND_BEZIER = 1, /* RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE: a swept circle (tests/ref_tube.h) */
     /* ray-facing ribbons in the other bases (emb_build_curves) */
     EMB_FLAT_BSPLINE = 2,
     EMB_FLAT_CATMULL_ROM = 3,
     EMB_FLAT_HERMITE = 4, /* needs tangents */
     EMB_FLAT_LINEAR = 5,
-    EMB_ROUND_CATMULL_ROM = 6 /* swept sphere along Catmull-Rom segments (the bench's yeti scene) */
+    EMB_ROUND_CATMULL_ROM = 6 /* a swept circle along Catmull-Rom segments (the bench's yeti scene) */
 };
 
 typedef struct emb_scene {

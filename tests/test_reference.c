@@ -8,6 +8,7 @@
  */
 #include "check.h"
 #include "reference.h"
+#include "ref_tube.h"
 
 #include <float.h>
 #include <math.h>
@@ -715,6 +716,250 @@ static void compare_all_hits(const char *label, double offset)
     free_scene(&d);
 }
 
+/* ------------------------------------------------------------------------ */
+/* The tube reference (ref_tube.h)                                          */
+/* ------------------------------------------------------------------------ */
+
+/* A straight segment along x from x0 to x1 with radii r0, r1 at its ends
+   (control points at thirds: c(u) linear, r(u) linear). */
+static void tube_straight(float ctrl[16], double x0, double x1, double r0, double r1)
+{
+    int i;
+    for (i = 0; i < 4; ++i) {
+        ctrl[4 * i + 0] = (float)(x0 + (x1 - x0) * i / 3.0);
+        ctrl[4 * i + 1] = 0.0f;
+        ctrl[4 * i + 2] = 0.0f;
+        ctrl[4 * i + 3] = (float)(r0 + (r1 - r0) * i / 3.0);
+    }
+}
+
+/* Straight segments: the swept circle is the cylinder or, tapered, the cone
+   frustum y^2 + z^2 = r(x)^2, x in [x0, x1]. Its hits solve a quadratic in
+   t; both roots (entry and exit) must be the reference's, to 1e-9. */
+static void test_tube_analytic(void)
+{
+    int ray_index, mismatches = 0, hits = 0, exits = 0, v_bad = 0;
+    char detail[256] = "";
+    for (ray_index = 0; ray_index < 4000; ++ray_index) {
+        int tapered = ray_index & 1, n_expected = 0, n_found = 0, k, j;
+        float ctrl[16], org[3], dir[3];
+        /* exact in float at the thirds too: c(u) and r(u) are exactly linear */
+        double x0 = -1.5, x1 = 1.5, r0 = 0.375, r1 = tapered ? 0.1875 : 0.375, slope = (r1 - r0) / (x1 - x0);
+        double o[3], d[3], qa, qb, qc, disc, expected[2];
+        ref__ray ray;
+        ref_tube_hit all[REF_TUBE_MAX_ROOTS], h;
+        tube_straight(ctrl, x0, x1, r0, r1);
+        for (k = 0; k < 3; ++k) {
+            o[k] = rnd_range(-3.0, 3.0);
+            d[k] = rnd_range(-1.0, 1.0);
+        }
+        o[2] = rnd_range(2.0, 4.0) * (rnd() < 0.5 ? -1.0 : 1.0);   /* away from the axis, */
+        d[1] += -0.3 * o[1];                                        /* aimed at it */
+        d[2] = -o[2] * rnd_range(0.2, 0.5);
+        for (k = 0; k < 3; ++k) {
+            org[k] = (float)o[k];
+            dir[k] = (float)d[k];
+            o[k] = org[k];
+            d[k] = dir[k];
+        }
+        /* (oy + t dy)^2 + (oz + t dz)^2 = (r0 + slope (ox + t dx - x0))^2 */
+        {
+            double e = r0 + slope * (o[0] - x0), f = slope * d[0];
+            qa = d[1] * d[1] + d[2] * d[2] - f * f;
+            qb = 2.0 * (o[1] * d[1] + o[2] * d[2] - e * f);
+            qc = o[1] * o[1] + o[2] * o[2] - e * e;
+        }
+        disc = qb * qb - 4.0 * qa * qc;
+        if (disc > 0.0 && qa != 0.0) {
+            double root[2];
+            root[0] = (-qb - sqrt(disc)) / (2.0 * qa);
+            root[1] = (-qb + sqrt(disc)) / (2.0 * qa);
+            for (j = 0; j < 2; ++j) {
+                double x = o[0] + root[j] * d[0], radius = r0 + slope * (x - x0);
+                /* on the frustum's sheet (not its mirror cone), inside the ends, ahead */
+                if (root[j] >= 0.0 && x > x0 && x < x1 && radius > 0.0) expected[n_expected++] = root[j];
+            }
+        }
+        ref__ray_setup(&ray, org, dir);
+        ref_tube_segment_hit(&ray, ctrl, 0.0, INFINITY, &h, all, &n_found);
+        if (n_found != n_expected) {
+            if (!mismatches) snprintf(detail, sizeof detail, "ray %d: %d hits, expected %d", ray_index, n_found, n_expected);
+            ++mismatches;
+            continue;
+        }
+        for (j = 0; j < n_found; ++j) {
+            int matched = 0, m;
+            for (m = 0; m < n_expected; ++m) matched |= fabs(all[j].t - expected[m]) <= 1e-9 * (1.0 + expected[m]);
+            if (!matched) {
+                if (!mismatches) snprintf(detail, sizeof detail, "ray %d: t %.17g not among the quadratic's roots", ray_index, all[j].t);
+                ++mismatches;
+            }
+            /* the cone's outward normal is (-slope, y, z)/|.| at the hit */
+            {
+                double X[3], nn[3], len;
+                for (k = 0; k < 3; ++k) X[k] = o[k] + all[j].t * d[k];
+                nn[0] = -slope * sqrt(X[1] * X[1] + X[2] * X[2]);
+                nn[1] = X[1];
+                nn[2] = X[2];
+                len = sqrt(ref__dot3(nn, nn));
+                if (fabs(ref__dot3(nn, all[j].normal) / len - 1.0) > 1e-9) {
+                    if (!mismatches) snprintf(detail, sizeof detail, "ray %d: normal off the cone's", ray_index);
+                    ++mismatches;
+                }
+            }
+            exits += all[j].exit;
+            v_bad += !(all[j].v >= -1.0 && all[j].v <= 1.0);
+        }
+        hits += n_found;
+    }
+    printf("  (tube, straight and tapered: %d hits over 4000 rays, %d of them exits)\n", hits, exits);
+    check(mismatches == 0 && hits > 200 && exits > hits / 3 && v_bad == 0,
+          "tube: straight and tapered segments hit where the cylinder's and the frustum's quadratics say, normals included", detail);
+}
+
+/* g(u) = |X(u) - c(u)|^2 - r(u)^2 where X(u) is the ray's point in the plane
+   normal to c'(u) through c(u): computed in world space from the control
+   points, without ref_tube.h's polynomial, ray frame or Bernstein forms. */
+static double tube_g(const float *ctrl, const double o[3], const double d[3], double u, double *t_out)
+{
+    double c[3], dc[3], X[3], radius, s = 1.0 - u, denominator, t, g;
+    int k;
+    for (k = 0; k < 3; ++k) {
+        double p0 = ctrl[k], p1 = ctrl[4 + k], p2 = ctrl[8 + k], p3 = ctrl[12 + k];
+        c[k] = s * s * s * p0 + 3 * u * s * s * p1 + 3 * u * u * s * p2 + u * u * u * p3;
+        dc[k] = 3 * (s * s * (p1 - p0) + 2 * u * s * (p2 - p1) + u * u * (p3 - p2));
+    }
+    radius = s * s * s * ctrl[3] + 3 * u * s * s * ctrl[7] + 3 * u * u * s * ctrl[11] + u * u * u * ctrl[15];
+    denominator = ref__dot3(d, dc);
+    {
+        double oc[3];
+        for (k = 0; k < 3; ++k) oc[k] = c[k] - o[k];
+        t = ref__dot3(oc, dc) / denominator;
+    }
+    for (k = 0; k < 3; ++k) X[k] = o[k] + t * d[k] - c[k];
+    g = ref__dot3(X, X) - radius * radius;
+    *t_out = t;
+    return g;
+}
+
+/* Curved, tapered segments: every hit the reference finds is a sign change
+   of g on a grid of 20,000 steps refined by bisection, and the reverse;
+   the normals are the gradient of |X - c(u(X))|^2 - r(u(X))^2 taken by
+   central differences. */
+static void test_tube_sampling(void)
+{
+    int segment, mismatches = 0, hits = 0, normal_bad = 0;
+    double worst_normal = 0.0;
+    char detail[256] = "";
+    for (segment = 0; segment < 60; ++segment) {
+        float ctrl[16];
+        int i, k, ray_index;
+        for (i = 0; i < 4; ++i) {
+            ctrl[4 * i + 0] = (float)(i * 0.5 + rnd_range(-0.4, 0.4));
+            ctrl[4 * i + 1] = (float)rnd_range(-0.5, 0.5);
+            ctrl[4 * i + 2] = (float)rnd_range(-0.5, 0.5);
+            ctrl[4 * i + 3] = (float)rnd_range(0.05, 0.2);
+        }
+        for (ray_index = 0; ray_index < 40; ++ray_index) {
+            float org[3], dir[3];
+            double o[3], d[3], sampled[64];
+            int n_sampled = 0, n_found = 0, j, step;
+            const int steps = 20000;
+            double previous_g = 0.0, previous_t = 0.0;
+            ref__ray ray;
+            ref_tube_hit all[REF_TUBE_MAX_ROOTS], h;
+            for (k = 0; k < 3; ++k) {
+                double target = (k == 0 ? 0.75 : 0.0) + rnd_range(-0.6, 0.6);
+                o[k] = rnd_range(-4.0, 4.0);
+                org[k] = (float)o[k];
+                dir[k] = (float)(target - o[k]);
+                o[k] = org[k];
+                d[k] = dir[k];
+            }
+            for (step = 0; step <= steps; ++step) {
+                double u = (double)step / steps, t, g = tube_g(ctrl, o, d, u, &t);
+                if (step > 0 && (g < 0.0) != (previous_g < 0.0) && fabs(t - previous_t) < 0.5) {
+                    double a = (double)(step - 1) / steps, b = u, ta = 0.0;
+                    int sign_a = previous_g < 0.0, it;
+                    for (it = 0; it < 60; ++it) {
+                        double m = 0.5 * (a + b), gm = tube_g(ctrl, o, d, m, &ta);
+                        if ((gm < 0.0) == sign_a) a = m; else b = m;
+                    }
+                    tube_g(ctrl, o, d, 0.5 * (a + b), &ta);
+                    if (ta >= 0.0 && n_sampled < 64) sampled[n_sampled++] = ta;
+                }
+                previous_g = g;
+                previous_t = t;
+            }
+            ref__ray_setup(&ray, org, dir);
+            ref_tube_segment_hit(&ray, ctrl, 0.0, INFINITY, &h, all, &n_found);
+            for (j = 0; j < n_found; ++j) {
+                int m, matched = 0;
+                for (m = 0; m < n_sampled; ++m) matched |= fabs(all[j].t - sampled[m]) <= 1e-8 * (1.0 + fabs(sampled[m]));
+                if (!matched) {
+                    if (!mismatches) snprintf(detail, sizeof detail, "segment %d ray %d: reference t %.17g not sampled", segment, ray_index, all[j].t);
+                    ++mismatches;
+                }
+            }
+            for (j = 0; j < n_sampled; ++j) {
+                int m, matched = 0;
+                for (m = 0; m < n_found; ++m) matched |= fabs(all[m].t - sampled[j]) <= 1e-8 * (1.0 + fabs(sampled[j]));
+                if (!matched) {
+                    if (!mismatches) snprintf(detail, sizeof detail, "segment %d ray %d: sampled t %.17g missed", segment, ray_index, sampled[j]);
+                    ++mismatches;
+                }
+            }
+            /* normals: F(X) = |X - c(u)|^2 - r(u)^2 at the u whose plane holds X */
+            for (j = 0; j < n_found; ++j) {
+                double X[3], grad[3], len, cosine, hstep = 1e-6;
+                for (k = 0; k < 3; ++k) X[k] = o[k] + all[j].t * d[k];
+                for (k = 0; k < 3; ++k) {
+                    double F[2];
+                    int side;
+                    for (side = 0; side < 2; ++side) {
+                        double Y[3], u = all[j].u, c[3], dc[3], d2[3], radius, dr, d2r, e[3];
+                        int it, q;
+                        for (q = 0; q < 3; ++q) Y[q] = X[q];
+                        Y[k] += side ? hstep : -hstep;
+                        for (it = 0; it < 50; ++it) {   /* Newton on (Y - c(u)).c'(u) = 0 */
+                            double f, df;
+                            for (q = 0; q < 3; ++q) {
+                                double cp[4] = {ctrl[q], ctrl[4 + q], ctrl[8 + q], ctrl[12 + q]};
+                                ref_tube__cubic(cp, u, &c[q], &dc[q], &d2[q]);
+                                e[q] = Y[q] - c[q];
+                            }
+                            f = ref__dot3(e, dc);
+                            df = ref__dot3(e, d2) - ref__dot3(dc, dc);
+                            u -= f / df;
+                        }
+                        {
+                            double rp[4] = {ctrl[3], ctrl[7], ctrl[11], ctrl[15]};
+                            ref_tube__cubic(rp, u, &radius, &dr, &d2r);
+                            for (q = 0; q < 3; ++q) {
+                                double cp[4] = {ctrl[q], ctrl[4 + q], ctrl[8 + q], ctrl[12 + q]};
+                                ref_tube__cubic(cp, u, &c[q], &dc[q], &d2[q]);
+                                e[q] = Y[q] - c[q];
+                            }
+                        }
+                        F[side] = ref__dot3(e, e) - radius * radius;
+                    }
+                    grad[k] = (F[1] - F[0]) / (2 * hstep);
+                }
+                len = sqrt(ref__dot3(grad, grad));
+                cosine = ref__dot3(grad, all[j].normal) / len;
+                if (1.0 - cosine > worst_normal) worst_normal = 1.0 - cosine;
+                normal_bad += !(cosine > 1.0 - 1e-6);
+            }
+            hits += n_found;
+        }
+    }
+    printf("  (tube, curved and tapered: %d hits of 60 segments x 40 rays; normals within %.2g of the gradient)\n", hits,
+           worst_normal);
+    check(mismatches == 0 && hits > 200, "tube: curved segments' hits are g's sign changes on a fine grid, and only those",
+          detail);
+    check(normal_bad == 0, "tube: normals (with the curvature term) are the gradient of the implicit function", NULL);
+}
+
 int main(void)
 {
     test_straight();
@@ -728,5 +973,7 @@ int main(void)
     compare_nearest("random scene at 1e5", 1e5);
     compare_all_hits("random scene", 0.0);
     compare_all_hits("random scene at 1e5", 1e5);
+    test_tube_analytic();
+    test_tube_sampling();
     return check_summary();
 }
