@@ -173,12 +173,25 @@
      bracketed Newton iteration after a conservative test against 8 linear
      pieces, so its hits agree with this definition up to float rounding.
      docs/accuracy.md says how that is measured.
+     Round curves (options.shape = HAIROBB_SHAPE_ROUND) are tubes instead:
+     at each u a circle of radius r(u) about P(u) in the plane normal to
+     P'(u) (Embree's cubic round curves; not a sweep of spheres, which is
+     fatter where the radius tapers). The ends are open. Both sheets count:
+     a ray meets the entry at t = (z(u) - S)/|dir| and the exit at (z(u) +
+     S)/|dir|, S = sqrt(r^2 - |P2|^2), where the circle's plane meets the
+     ray on the circle. The intersector samples each sheet's equation at
+     33 values of u and refines each sign change by bisection: a ray that
+     grazes a tube, entering and leaving within one step, can be missed
+     (about 1 ray in 16,000 of the tests' camera rays). Round curves take
+     the exact precision only (PIECES: INVALID_ARGUMENT).
 
 
    6. HITS
    -------
      hairobb_hit: t, u, v as above; Ng the ribbon's unit normal facing the ray
-     origin; tangent = P'(u) in world space; prim_id the segment index.
+     origin (round curves: the tube's outward unit normal, with the
+     curvature term, n ~ R - r r' P' / (|P'|^2 - R.P''), R = X - P(u));
+     tangent = P'(u) in world space; prim_id the segment index.
      (Embree's flat curves report v in [0, 1] and the tangent as Ng.)
      Every hit with t in [tnear, tfar] counts, including the ribbon a
      secondary ray starts on. Trace secondary rays with
@@ -186,7 +199,10 @@
      leave: they start at org + hit.t * dir with tnear = 0 and skip the
      ribbon they start on, its segment and the segments joined to its ends,
      within 2 radii (Embree drops every hit with t <= 2 r / |dir|, other
-     hairs included; here other hairs in contact still cast shadows).
+     hairs included; here other hairs in contact still cast shadows). On
+     round curves only the sheet a ray leaves through is skipped there (a
+     ray along `from`'s outward Ng skips exits, one against it entries):
+     a ray going into the fibre finds its far side.
      An any-hit filter (options.hit_filter) sees each hit before it is
      taken: transparent hair, shadow rays through opacity. Which candidate
      hits it is shown, and in what order, depends on the traversal's order
@@ -302,6 +318,11 @@
                              (default) and _ON compare the hair with the
                              saved hash, _OFF skips that pass.
      time_steps, time_vertices  motion blur (MOTION BLUR); 0: static hair.
+     shape                   HAIROBB_SHAPE_RIBBON (default): flat ribbons
+                             facing the ray; HAIROBB_SHAPE_ROUND: tubes
+                             (THE SURFACE), for close-ups; every basis,
+                             motion, refit, save and load; the BVH and its
+                             memory are the ribbon's.
 
 
    8. THREADS and BUILD MEMORY
@@ -580,6 +601,12 @@ typedef enum hairobb_precision {
     HAIROBB_PRECISION_PIECES      /* linear pieces only (like Embree's flat curves) */
 } hairobb_precision;
 
+/* The surface a segment is (SHAPES). */
+typedef enum hairobb_shape {
+    HAIROBB_SHAPE_RIBBON = 0,     /* a flat ribbon facing the ray (Embree's flat curves) */
+    HAIROBB_SHAPE_ROUND           /* a tube: a swept circle (Embree's round curves), both sheets */
+} hairobb_shape;
+
 /* How an OBB node stores its child boxes (sizes for 4-/8-wide nodes). */
 typedef enum hairobb_obb_layout {
     HAIROBB_OBB_DEFAULT = 0,         /* the layout the bench recommends (see BUILD OPTIONS) */
@@ -664,6 +691,7 @@ typedef struct hairobb_build_options {
        points each, the hair at times k / (time_steps - 1); 0 or 1: static */
     unsigned time_steps;
     const float *const *time_vertices;
+    hairobb_shape shape;             /* HAIROBB_SHAPE_RIBBON (0) or _ROUND (SHAPES) */
 } hairobb_build_options;
 
 typedef struct hairobb_bvh hairobb_bvh;
@@ -759,7 +787,7 @@ typedef struct hairobb_ray {
 
 typedef struct hairobb_hit {
     float t, u, v;      /* distance, curve parameter, signed position across the ribbon */
-    float Ng[3];        /* unit geometric normal of the ribbon, facing the ray origin */
+    float Ng[3];        /* unit geometric normal: the ribbon's, facing the ray origin; a tube's, outward */
     float tangent[3];   /* dP/du at u in world space, not normalised */
     uint32_t prim_id;   /* segment index, HAIROBB_INVALID_ID on a miss */
 } hairobb_hit;
@@ -1249,6 +1277,7 @@ HAIROBB__INLINE int hairobb__highest_bit(unsigned bits)
    which hairobb_save records and hairobb_load reads back. */
 typedef struct hairobb__tree_settings {
     hairobb_precision precision;
+    hairobb_shape shape;
     hairobb_node_policy policy;
     hairobb_obb_layout obb_layout;
     unsigned max_leaf_size, pieces;
@@ -1293,6 +1322,7 @@ struct hairobb_bvh {
     uint64_t root;
     float lower[3], upper[3];
     hairobb_precision precision;
+    hairobb_shape shape;
     /* what hairobb_save records besides: the build's resolved options */
     hairobb_node_policy policy;
     hairobb_obb_layout obb_layout;
@@ -1413,7 +1443,8 @@ static hairobb_result hairobb__resolve_options(const hairobb_build_options *give
         (unsigned)opt->spatial_splits > HAIROBB_OFF || (unsigned)opt->clustering > HAIROBB_OFF ||
         !(opt->spatial_split_budget >= 0.0f && opt->spatial_split_budget <= HAIROBB__MAX_SPLIT_BUDGET) ||
         opt->max_leaf_size > HAIROBB__MAX_LEAF || opt->hair_space_candidates > HAIROBB__MAX_CANDIDATES ||
-        opt->curve_pieces > HAIROBB__MAX_PIECES)
+        opt->curve_pieces > HAIROBB__MAX_PIECES || (unsigned)opt->shape > HAIROBB_SHAPE_ROUND ||
+        (opt->shape == HAIROBB_SHAPE_ROUND && opt->precision == HAIROBB_PRECISION_PIECES))
         return HAIROBB_ERROR_INVALID_ARGUMENT;
     if (opt->obb_layout == HAIROBB_OBB_DEFAULT) opt->obb_layout = HAIROBB__DEFAULT_OBB_LAYOUT;
     if (opt->spatial_splits == HAIROBB_AUTO) opt->spatial_splits = HAIROBB__DEFAULT_SPATIAL_SPLITS;
@@ -4476,6 +4507,7 @@ static void hairobb__set_settings(hairobb_bvh *bvh, const hairobb_build_options 
                                   const hairobb__tree_settings *tree)
 {
     bvh->precision = tree->precision;
+    bvh->shape = tree->shape;
     bvh->policy = tree->policy;
     bvh->obb_layout = tree->obb_layout;
     bvh->max_leaf_size = tree->max_leaf_size;
@@ -4734,6 +4766,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     hairobb__builder_free(&b);
     hairobb__pad_box(bvh->lower, bvh->upper);
     tree.precision = opt.precision;
+    tree.shape = opt.shape;
     tree.policy = opt.nodes;
     tree.obb_layout = opt.obb_layout;
     tree.max_leaf_size = opt.max_leaf_size;
@@ -5186,7 +5219,8 @@ HAIROBB_DEF hairobb_result hairobb_refit_motion(hairobb_bvh *bvh, const float *c
 #define HAIROBB__AT_NODE_BYTES 80
 #define HAIROBB__AT_LEAF_PRIMS 88
 #define HAIROBB__AT_BOUNDS 96           /* ... float lower[3], upper[3] */
-#define HAIROBB__AT_TIME_STEPS 120      /* uint32: motion blur's steps, 0 static; 124..127 zero */
+#define HAIROBB__AT_TIME_STEPS 120      /* uint32: motion blur's steps, 0 static */
+#define HAIROBB__AT_SHAPE 124           /* uint32: hairobb_shape (files before it have 0 here: ribbons) */
 static const unsigned char hairobb__save_magic[8] = {'H', 'A', 'I', 'R', 'O', 'B', 'B', 0x1a};
 
 /* A 64-bit hash of 8-byte words: each step (xor the word, multiply by an
@@ -5334,6 +5368,7 @@ HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, si
     hairobb__put64(out + HAIROBB__AT_VERTICES, hairobb__traced_vertex_count(bvh));
     hairobb__put64(out + HAIROBB__AT_HAIR_HASH, hairobb__traced_hash(bvh));
     hairobb__put32(out + HAIROBB__AT_TIME_STEPS, bvh->time_steps);
+    hairobb__put32(out + HAIROBB__AT_SHAPE, (uint32_t)bvh->shape);
     hairobb__put64(out + HAIROBB__AT_ROOT, bvh->root);
     hairobb__put64(out + HAIROBB__AT_NODE_BYTES, bvh->node_bytes);
     hairobb__put64(out + HAIROBB__AT_LEAF_PRIMS, bvh->leaf_prim_count);
@@ -5441,7 +5476,7 @@ typedef struct hairobb__saved {
    are finite. */
 static hairobb_result hairobb__read_saved(const unsigned char *in, size_t size, hairobb__saved *saved)
 {
-    uint32_t flags, precision, pieces, layout, max_leaf, policy;
+    uint32_t flags, precision, pieces, layout, max_leaf, policy, shape;
     size_t i;
     int k;
     if (size < HAIROBB__SAVE_HEADER + 8 || memcmp(in, hairobb__save_magic, sizeof hairobb__save_magic) != 0)
@@ -5470,7 +5505,8 @@ static hairobb_result hairobb__read_saved(const unsigned char *in, size_t size, 
     saved->segments = hairobb__get64(in + HAIROBB__AT_SEGMENTS);
     if (saved->basis > HAIROBB_BASIS_LINEAR || precision > HAIROBB_PRECISION_PIECES || pieces < 1 || pieces > HAIROBB__MAX_PIECES ||
         layout < HAIROBB_OBB_PER_CHILD || layout > HAIROBB_OBB_COMPRESSED_PER_CHILD || max_leaf < 1 || max_leaf > HAIROBB__MAX_LEAF ||
-        policy > HAIROBB_NODES_OBB_ONLY || hairobb__get32(in + 124) != 0 ||
+        policy > HAIROBB_NODES_OBB_ONLY || (shape = hairobb__get32(in + HAIROBB__AT_SHAPE)) > HAIROBB_SHAPE_ROUND ||
+        (shape == HAIROBB_SHAPE_ROUND && precision == HAIROBB_PRECISION_PIECES) ||
         saved->segments == 0 || saved->leaf_prim_count == 0 || saved->node_bytes % 16 != 0)
         return HAIROBB_ERROR_INVALID_FILE;
     for (i = HAIROBB__SAVE_HEADER + (size_t)saved->node_bytes + sizeof(uint32_t) * (size_t)saved->leaf_prim_count;
@@ -5490,6 +5526,7 @@ static hairobb_result hairobb__read_saved(const unsigned char *in, size_t size, 
     saved->tree.obb_layout = (hairobb_obb_layout)layout;
     saved->tree.max_leaf_size = max_leaf;
     saved->tree.pieces = pieces;
+    saved->tree.shape = (hairobb_shape)shape;
     return HAIROBB_OK;
 }
 
@@ -5722,6 +5759,8 @@ typedef struct hairobb__ray_state {
        joined to its ends (positions of its first and last control point)
        are ignored; skip_t = 0 for other rays */
     float skip_t;
+    float skip_sheet;           /* tubes: the sheet skipped (+1 entries, -1 exits); 0 ribbons: every hit */
+    int skipping;               /* tubes: set while a skipped segment is tested */
     uint32_t skip_prim;
     float skip_first[3], skip_last[3];
 } hairobb__ray_state;
@@ -5784,6 +5823,8 @@ static int hairobb__ray_setup(hairobb__ray_state *rs, const hairobb_bvh *bvh, co
     rs->hit_points = NULL;
     rs->hit_u = 0.0f;
     rs->skip_t = 0.0f;
+    rs->skip_sheet = 0.0f;
+    rs->skipping = 0;
     rs->dir_length = sqrtf(hairobb__dot3(ray->dir, ray->dir));
     if (!(rs->dir_length > 0.0f) || !(rs->dir_length < INFINITY) || !(rs->tnear <= rs->tfar)) return 0;
     if (bvh->time_steps && !(rs->time >= 0.0f && rs->time <= 1.0f)) return 0;   /* NaN too */
@@ -5832,6 +5873,13 @@ static int hairobb__ray_setup_from(hairobb__ray_state *rs, const hairobb_bvh *bv
     max_r = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
     magnitude = hairobb__maxf(hairobb__maxf(fabsf(ray->org[0]), fabsf(ray->org[1])), fabsf(ray->org[2]));
     rs->skip_t = (2.0f * max_r + magnitude * (8.0f * FLT_EPSILON)) * rs->inv_dir_length;
+    /* A tube does not turn to face the new ray. A ray that starts on it,
+       its origin a rounding inside or outside, can meet the sheet it
+       leaves through at once: a ray going out (along the outward normal
+       `from` gives) an exit, a ray going in an entry. Only that sheet is
+       skipped within the band, so a ray going in finds the fibre's far
+       side. */
+    if (bvh->shape == HAIROBB_SHAPE_ROUND) rs->skip_sheet = hairobb__dot3(ray->dir, from->Ng) > 0.0f ? -1.0f : 1.0f;
     rs->skip_prim = from->prim_id;
     memcpy(rs->skip_first, cp, sizeof rs->skip_first);
     memcpy(rs->skip_last, cp + 12, sizeof rs->skip_last);
@@ -6915,6 +6963,91 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
     return found;
 }
 
+/* Round curves (HAIROBB_SHAPE_ROUND): the tube swept by a circle of radius
+   r(u) about the centre line in the plane normal to its tangent. In ray
+   space, with P2 = (x, y) and w = x x' + y y', that plane meets the ray at
+   depth z + w / z', and the ray meets the circle where w^2 = z'^2 (r^2 -
+   |P2|^2). With S = sqrt(r^2 - |P2|^2) where the ray passes within r of
+   the centre (|P2| <= r), the two sheets are the roots of
+       g(u) = w + sheet z' S:   sheet +1, the entry, at depth z - S;
+                                sheet -1, the exit,  at depth z + S.
+   g is continuous (S is 0 outside, where g = w); a root where |P2| > r is a
+   root of w alone, not a hit. g is sampled at HAIROBB__TUBE_SAMPLES + 1
+   values of u and each sign change refined by bisection, which needs no
+   derivative (S's is infinite at the tube's silhouette). Two roots of one
+   sheet within one sample step (a ray grazing the tube) can be missed. */
+#define HAIROBB__TUBE_SAMPLES 32
+
+/* at u: out = w, z', z, S, |P2|^2 - r^2 */
+static void hairobb__tube_at(const hairobb__ray_poly *p, float u, float out[5])
+{
+    hairobb__v4 d1, value = hairobb__horner(p, hairobb__v4_set1(u), &d1, NULL);
+    float v[4], d[4], r, q;
+    hairobb__v4_store(v, value);
+    hairobb__v4_store(d, d1);
+    r = hairobb__maxf(v[3], 0.0f);
+    q = v[0] * v[0] + v[1] * v[1] - r * r;
+    out[0] = v[0] * d[0] + v[1] * d[1];
+    out[1] = d[2];
+    out[2] = v[2];
+    out[3] = q < 0.0f ? sqrtf(-q) : 0.0f;
+    out[4] = q;
+}
+
+static float hairobb__tube_g(const float at[5], float sheet) { return at[0] + sheet * at[1] * at[3]; }
+
+/* The root of a sheet's g in [lo, hi], where it changes sign (g_lo at lo). */
+static float hairobb__tube_root(const hairobb__ray_poly *p, float lo, float hi, float g_lo, float sheet)
+{
+    int iteration;
+    for (iteration = 0; iteration < 40; ++iteration) {
+        float middle = 0.5f * (lo + hi), at[5], g;
+        if (middle <= lo || middle >= hi) break;
+        hairobb__tube_at(p, middle, at);
+        g = hairobb__tube_g(at, sheet);
+        if (g == 0.0f) return middle;
+        if ((g < 0.0f) == (g_lo < 0.0f)) lo = middle; else hi = middle;
+    }
+    return 0.5f * (lo + hi);
+}
+
+/* Records a sheet's hit at u if the ray passes within r of the centre there. */
+static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__ray_poly *p, uint32_t prim, float u, float sheet)
+{
+    float at[5];
+    float t;
+    hairobb__tube_at(p, u, at);
+    if (!(at[4] <= 0.0f)) return 0;
+    t = (at[2] - sheet * at[3]) * rs->inv_dir_length;
+    if (rs->skipping && sheet == rs->skip_sheet && t < rs->skip_t) return 0;
+    return hairobb__accept(rs, prim, u, t, 0.0f, 0.0f, 0.0f);
+}
+
+static int hairobb__intersect_tube(hairobb__ray_state *rs, const hairobb__ray_curve *c, uint32_t prim, int any_hit)
+{
+    hairobb__ray_poly poly;
+    float previous[5], current[5], u_previous = 0.0f;
+    int k, found = 0;
+    hairobb__to_power_form(c, &poly);
+    hairobb__tube_at(&poly, 0.0f, previous);
+    for (k = 1; k <= HAIROBB__TUBE_SAMPLES; ++k) {
+        float u = (float)k / (float)HAIROBB__TUBE_SAMPLES, sheet;
+        hairobb__tube_at(&poly, u, current);
+        for (sheet = 1.0f; sheet >= -1.0f; sheet -= 2.0f) {
+            float g0 = hairobb__tube_g(previous, sheet), g1 = hairobb__tube_g(current, sheet);
+            if (k == 1 && g0 == 0.0f) found |= hairobb__tube_hit(rs, &poly, prim, 0.0f, sheet);
+            if (g1 == 0.0f)
+                found |= hairobb__tube_hit(rs, &poly, prim, u, sheet);
+            else if (g0 != 0.0f && (g0 < 0.0f) != (g1 < 0.0f))
+                found |= hairobb__tube_hit(rs, &poly, prim, hairobb__tube_root(&poly, u_previous, u, g0, sheet), sheet);
+            if (found && any_hit) return 1;
+        }
+        memcpy(previous, current, sizeof previous);
+        u_previous = u;
+    }
+    return found;
+}
+
 /* One segment: moved into ray space and culled by its control polygon (the
    ribbon lies in its hull dilated by the largest radius), then the pieces.
    (Culling 4 segments at once with SIMD measured slower: leaves hold
@@ -6960,6 +7093,7 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
         float slack = hairobb__v4_hmax(hairobb__v4_abs(z)) * HAIROBB__Z_SLACK;
         float z_near = rs->tnear * rs->dir_length, z_far = rs->tfar * rs->dir_length;
         hairobb__v4 d;
+        if (bvh->shape == HAIROBB_SHAPE_ROUND) slack += max_r;   /* a tube's sheets lie within r of its centre line's depth */
         z_near -= fabsf(z_near) * (8.0f * FLT_EPSILON) + slack;
         z_far += fabsf(z_far) * (8.0f * FLT_EPSILON) + slack;
         magnitude = hairobb__v4_hmax(hairobb__v4_max(hairobb__v4_abs(x), hairobb__v4_abs(y)));
@@ -6973,7 +7107,9 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
     hairobb__v4_store(c.z, z);
     hairobb__v4_store(c.r, r);
     HAIROBB__COUNT(segment_passed);
-    if (!hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit)) return 0;
+    if (bvh->shape == HAIROBB_SHAPE_ROUND ? !hairobb__intersect_tube(rs, &c, prim, any_hit)
+                                          : !hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit))
+        return 0;
     if (!any_hit) {   /* the nearest hit so far is on this segment */
         rs->hit_curve = c;
         /* kept for the hit's attributes: no lookup by prim, which misses at scale */
@@ -7003,7 +7139,11 @@ static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *r
         const float *cp = copy ? copy + 16 * i
                                : hairobb__points_at(bvh, 4 * (size_t)bvh->leaf_offsets[first + i], rs->time, scratch);
         if (HAIROBB__LEAF_VISIT(rs, prim)) continue;
-        if (rs->skip_t > 0.0f && hairobb__skipped(rs, prim, cp)) {
+        if (rs->skip_t > 0.0f && rs->skip_sheet != 0.0f && hairobb__skipped(rs, prim, cp)) {
+            rs->skipping = 1;   /* a tube: one sheet, near the origin (hairobb__tube_hit) */
+            hit = hairobb__intersect_segment(bvh, rs, prim, cp, any_hit);
+            rs->skipping = 0;
+        } else if (rs->skip_t > 0.0f && hairobb__skipped(rs, prim, cp)) {
             /* this segment alone is tested from skip_t on */
             float tnear = rs->tnear;
             rs->tnear = hairobb__maxf(tnear, rs->skip_t);
@@ -7037,6 +7177,54 @@ HAIROBB__INLINE void hairobb__bezier_v4(hairobb__v4 p0, hairobb__v4 p1, hairobb_
                              hairobb__v4_mul(hairobb__v4_set1(u * u * u), p3));
 }
 
+/* A tube's hit attributes, in world space from the segment's points cp:
+   the tangent dP/du; v, the ribbon's formula at the tube's point X (the
+   signed offset of the ray from the centre line across the fibre, over r);
+   and the outward unit normal, the gradient of |X - c(u(X))|^2 -
+   r(u(X))^2 with its curvature term: R - r r' c' / (|c'|^2 - R.c''), R = X
+   - c(u). */
+static void hairobb__tube_hit_at(const hairobb__ray_state *rs, const float *cp, float u, float t, hairobb_hit *hit)
+{
+    float s = 1.0f - u, b[4], db[4], d2b[4], C[3] = {0, 0, 0}, T[3] = {0, 0, 0}, T2[3] = {0, 0, 0}, r = 0.0f, dr = 0.0f;
+    float R[3], n[3], cross[3], along, tperp2, denominator, length, scale;
+    const float *unit_dir = rs->frame + 6;
+    int i, k;
+    b[0] = s * s * s; b[1] = 3.0f * u * s * s; b[2] = 3.0f * u * u * s; b[3] = u * u * u;
+    db[0] = -3.0f * s * s; db[1] = 3.0f * s * s - 6.0f * u * s; db[2] = 6.0f * u * s - 3.0f * u * u; db[3] = 3.0f * u * u;
+    d2b[0] = 6.0f * s; d2b[1] = 6.0f * u - 12.0f * s; d2b[2] = 6.0f * s - 12.0f * u; d2b[3] = 6.0f * u;
+    for (i = 0; i < 4; ++i) {
+        for (k = 0; k < 3; ++k) {
+            C[k] += b[i] * cp[4 * i + k];
+            T[k] += db[i] * cp[4 * i + k];
+            T2[k] += d2b[i] * cp[4 * i + k];
+        }
+        r += b[i] * cp[4 * i + 3];
+        dr += db[i] * cp[4 * i + 3];
+    }
+    r = hairobb__maxf(r, 0.0f);
+    for (k = 0; k < 3; ++k) R[k] = rs->org[k] + t * rs->dir[k] - C[k];
+    memcpy(hit->tangent, T, sizeof hit->tangent);
+    denominator = hairobb__dot3(T, T) - hairobb__dot3(R, T2);
+    scale = denominator != 0.0f ? r * dr / denominator : 0.0f;
+    for (k = 0; k < 3; ++k) n[k] = R[k] - scale * T[k];
+    length = sqrtf(hairobb__dot3(n, n));
+    if (!(length > 0.0f) || !(length < INFINITY)) {   /* degenerate: against the ray */
+        for (k = 0; k < 3; ++k) n[k] = -unit_dir[k];
+        length = 1.0f;
+    }
+    for (k = 0; k < 3; ++k) hit->Ng[k] = n[k] / length;
+    along = hairobb__dot3(T, unit_dir);
+    tperp2 = hairobb__dot3(T, T) - along * along;
+    cross[0] = T[1] * R[2] - T[2] * R[1];
+    cross[1] = T[2] * R[0] - T[0] * R[2];
+    cross[2] = T[0] * R[1] - T[1] * R[0];
+    hit->v = 0.0f;
+    if (r > 0.0f && tperp2 > 0.0f) {
+        hit->v = hairobb__dot3(cross, unit_dir) / (sqrtf(tperp2) * r);
+        hit->v = hairobb__maxf(-1.0f, hairobb__minf(1.0f, hit->v));
+    }
+}
+
 /* Hit attributes of the hit at u, t on segment prim, c in ray space:
    computed once for the final hit, and for each one a hit filter is shown. */
 static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint32_t prim, const float *points,
@@ -7044,6 +7232,13 @@ static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs
 {
     float scratch[16];
     const float *cp = points ? points : hairobb__segment_points(bvh, prim, rs->time, scratch);
+    if (bvh->shape == HAIROBB_SHAPE_ROUND) {
+        hairobb__tube_hit_at(rs, cp, u, t, hit);
+        hit->t = t;
+        hit->u = u;
+        hit->prim_id = prim;
+        return;
+    }
     hairobb__v4 x4 = hairobb__v4_load(c->x), y4 = hairobb__v4_load(c->y), z4 = hairobb__v4_set1(0.0f), r4 = hairobb__v4_load(c->r);
     hairobb__v4 value, d1, tangent, neg_dir, n4;
     float at[4], tangent_at[4], tangent_xy[2], x, y, r, tlen2, along, n[4], nlen;
@@ -7168,6 +7363,7 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__converted_points hairobb__converted_points_avx2
 #define hairobb__far_scale hairobb__far_scale_avx2
 #define hairobb__hit_at hairobb__hit_at_avx2
+#define hairobb__tube_hit_at hairobb__tube_hit_at_avx2
 #define hairobb__hit_filtered_out hairobb__hit_filtered_out_avx2
 #define hairobb__horner hairobb__horner_avx2
 #define hairobb__intersect_boxes hairobb__intersect_boxes_avx2
@@ -7179,6 +7375,11 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__intersect_other_node hairobb__intersect_other_node_avx2
 #define hairobb__intersect_rotated_node hairobb__intersect_rotated_node_avx2
 #define hairobb__intersect_segment hairobb__intersect_segment_avx2
+#define hairobb__intersect_tube hairobb__intersect_tube_avx2
+#define hairobb__tube_at hairobb__tube_at_avx2
+#define hairobb__tube_g hairobb__tube_g_avx2
+#define hairobb__tube_hit hairobb__tube_hit_avx2
+#define hairobb__tube_root hairobb__tube_root_avx2
 #define hairobb__joint_at hairobb__joint_at_avx2
 #define hairobb__made_moving hairobb__made_moving_avx2
 #define hairobb__piece_ends hairobb__piece_ends_avx2

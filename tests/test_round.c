@@ -1,6 +1,8 @@
-/* test_round.c - round curves (tubes): the double-precision tube reference
-   (ref_tube.h) against Embree's round Bezier curves on the same hair and
-   rays. Embree's cubic round curve is the swept circle the reference
+/* test_round.c - round curves (tubes, HAIROBB_SHAPE_ROUND): hairobb's tubes
+   against the double-precision tube reference (ref_tube.h) on camera rays
+   and on secondary rays leaving their hits (into the fibre: its far side;
+   out of it: never its own tube again), and the reference against Embree's
+   round Bezier curves on the same hair and rays. Embree's cubic round curve is the swept circle the reference
    defines, so the two must agree on which rays hit and where, to Embree's
    own accuracy (its Newton iteration stops at a few ulps and gives up on
    some rays). The figures are printed: hit/miss disagreements (Embree's
@@ -10,6 +12,8 @@
    (analytic cylinders and frustums, sampling, normals) are in
    test_reference.c. */
 #define _POSIX_C_SOURCE 200809L
+#define HAIROBB_IMPLEMENTATION
+#include "../hairobb.h"
 #include "check.h"
 #include "embree_wrap.h"
 #include "ref_tube.h"
@@ -169,10 +173,192 @@ static void test_sheets(void)
           "sheets: a ray through the tube meets an entry, then an exit (%d hits, first exit %d)", count, got ? first.exit : -1);
 }
 
+/* hairobb's tubes against the reference: camera rays, then from each hit
+   a ray going on into the fibre (it must leave through the fibre's far
+   side, the reference's exit) and one reflected outward (never its own
+   tube within the band). */
+static void compare_with_reference(const char *name, hair_scene *s, const hairobb_build_options *options)
+{
+    size_t n = (size_t)SIDE * SIDE, i, both = 0, disagree = 0, inward = 0, inward_bad = 0, outward = 0, outward_self = 0, v_bad = 0;
+    float *org = (float *)malloc(3 * sizeof(float) * n), *dir = (float *)malloc(3 * sizeof(float) * n);
+    double *error = (double *)malloc(sizeof(double) * n), worst_inward = 0.0;
+    boxes b;
+    hairobb_bvh *bvh = NULL;
+    CHECK(hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, options, &bvh) == HAIROBB_OK,
+          "%s: builds with round curves", name);
+    if (!bvh || !org || !dir || !error) return;
+    make_boxes(s, &b);
+    scene_camera_rays(s, SIDE, SIDE, org, dir);
+    for (i = 0; i < n; ++i) {
+        ref_tube_hit want;
+        hairobb_ray ray = {{org[3 * i], org[3 * i + 1], org[3 * i + 2]}, 0.0f, {dir[3 * i], dir[3 * i + 1], dir[3 * i + 2]}, INFINITY, 0.0f};
+        hairobb_hit hit;
+        int reference, got;
+        want.prim_id = REF_INVALID_ID;
+        reference = nearest(s, &b, org + 3 * i, dir + 3 * i, &want);
+        got = hairobb_intersect1(bvh, &ray, &hit);
+        if (got != reference) {
+            if (disagree < 3) printf("  %s: ray %zu: reference %d (prim %u t %.9g), hairobb %d (prim %u t %.9g)\n", name, i, reference,
+                                     want.prim_id, want.t, got, hit.prim_id, (double)hit.t);
+            ++disagree;
+            continue;
+        }
+        if (!got) continue;
+        error[both++] = fabs((double)hit.t - want.t) / want.r;
+        v_bad += !(fabs((double)hit.v - want.v) <= 1e-2) && !want.exit;
+        if (!want.exit) {
+            /* on into the fibre: from the entry, the same direction */
+            hairobb_ray next;
+            hairobb_hit exit_hit;
+            ref__ray rr;
+            ref_tube_hit all[REF_TUBE_MAX_ROOTS], first;
+            int count = 0, j, k;
+            double far_side = -1.0;
+            for (k = 0; k < 3; ++k) {
+                next.org[k] = ray.org[k] + hit.t * ray.dir[k];
+                next.dir[k] = ray.dir[k];
+            }
+            next.tnear = 0.0f;
+            next.tfar = INFINITY;
+            next.time = 0.0f;
+            ref__ray_setup(&rr, ray.org, ray.dir);
+            ref_tube_segment_hit(&rr, s->vertices + 4 * (size_t)s->indices[want.prim_id], want.t * (1.0 + 1e-9), INFINITY, &first, all,
+                                 &count);
+            for (j = 0; j < count; ++j)
+                if (all[j].exit && (far_side < 0.0 || all[j].t < far_side)) far_side = all[j].t;
+            if (far_side > want.t + 0.01 * want.r) {   /* a chord of some length: the band must not swallow it */
+                double expected = far_side - (double)hit.t;   /* from hairobb's entry, where the new ray starts */
+                ++inward;
+                if (!hairobb_intersect1_from(bvh, &hit, &next, &exit_hit) ||
+                    (exit_hit.prim_id == hit.prim_id && fabs((double)exit_hit.t - expected) > 2e-3 * want.r)) {
+                    if (getenv("DEBUG_ROUND")) printf("  inward ray %zu prim %u: expected %.9g (u %.6g), got %d prim %u t %.9g; entry u %.6g r %.4g\n", i, hit.prim_id, expected, all[0].u, exit_hit.prim_id != HAIROBB_INVALID_ID, exit_hit.prim_id, (double)exit_hit.t, want.u, want.r);
+                    ++inward_bad;
+                } else if (exit_hit.prim_id == hit.prim_id) {
+                    double e = fabs((double)exit_hit.t - expected) / want.r;
+                    worst_inward = e > worst_inward ? e : worst_inward;
+                }
+            }
+            /* reflected: out of the fibre, never its own tube nearby */
+            {
+                hairobb_ray out = next;
+                hairobb_hit again;
+                double dn = ray.dir[0] * hit.Ng[0] + ray.dir[1] * hit.Ng[1] + ray.dir[2] * hit.Ng[2];
+                for (k = 0; k < 3; ++k) out.dir[k] = (float)(ray.dir[k] - 2.0 * dn * hit.Ng[k]);
+                ++outward;
+                if (hairobb_intersect1_from(bvh, &hit, &out, &again) && again.prim_id == hit.prim_id && again.t < 2.0f * (float)want.r) {
+                    if (getenv("DEBUG_ROUND")) printf("  reflected ray %zu prim %u: again t %.9g u %.6g (entry u %.6g, r %.4g, dn %.3g)\n", i, hit.prim_id, (double)again.t, (double)again.u, want.u, want.r, dn);
+                    ++outward_self;
+                }
+            }
+        }
+    }
+    qsort(error, both, sizeof *error, compare_doubles);
+    printf("%s: hairobb's tubes against the reference: %zu of %zu rays disagree on hit or miss; |dt|/r median %.3g, p99 %.3g, "
+           "max %.3g over %zu hits; into the fibre %zu rays, %zu without its far side (worst |dt|/r %.3g); reflected %zu, %zu back "
+           "on their tube\n",
+           name, disagree, n, both ? error[both / 2] : 0.0, both ? error[(size_t)(0.99 * (double)(both - 1))] : 0.0,
+           both ? error[both - 1] : 0.0, both, inward, inward_bad, worst_inward, outward, outward_self);
+    CHECK(both > n / 20, "%s: %zu hits", name, both);
+    CHECK(disagree <= n / 2000, "%s: %zu of %zu rays disagree with the tube reference", name, disagree, n);
+    CHECK(both && error[(size_t)(0.99 * (double)(both - 1))] <= 2e-3, "%s: |dt|/r p99 %.3g", name,
+          both ? error[(size_t)(0.99 * (double)(both - 1))] : 0.0);
+    CHECK(v_bad <= both / 1000, "%s: v off the reference's on %zu hits", name, v_bad);
+    CHECK(inward > 100 && inward_bad <= inward / 1000, "%s: %zu of %zu rays into the fibre miss its far side", name, inward_bad, inward);
+    CHECK(outward_self == 0, "%s: %zu reflected rays hit their own tube again", name, outward_self);
+    hairobb_free(bvh);
+    free(b.lo);
+    free(b.hi);
+    free(org);
+    free(dir);
+    free(error);
+}
+
+/* A round BVH saved and loaded traces the same hits, bit for bit, and
+   reports round curves' attributes; one refitted to the same points too. */
+static void test_save_refit(hair_scene *s)
+{
+    hairobb_build_options o;
+    hairobb_bvh *bvh = NULL, *loaded = NULL, *refitted = NULL;
+    size_t n = 64 * 64, i, differ = 0, refit_differ = 0, hits = 0, size;
+    float *org = (float *)malloc(3 * sizeof(float) * n), *dir = (float *)malloc(3 * sizeof(float) * n);
+    void *buffer = NULL;
+    memset(&o, 0, sizeof o);
+    o.shape = HAIROBB_SHAPE_ROUND;
+    CHECK(hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, &o, &bvh) == HAIROBB_OK, "save: builds");
+    CHECK(hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, &o, &refitted) == HAIROBB_OK, "refit: builds");
+    if (!bvh || !refitted || !org || !dir) return;
+    size = hairobb_save_size(bvh);
+    buffer = malloc(size);
+    CHECK(buffer && hairobb_save(bvh, buffer, size) == HAIROBB_OK, "save: saves");
+    CHECK(hairobb_load(buffer, size, s->vertices, s->vertex_count, s->indices, s->segment_count, NULL, &loaded) == HAIROBB_OK,
+          "save: loads");
+    CHECK(hairobb_refit(refitted, s->vertices) == HAIROBB_OK, "refit: refits");
+    scene_camera_rays(s, 64, 64, org, dir);
+    for (i = 0; loaded && i < n; ++i) {
+        hairobb_ray ray = {{org[3 * i], org[3 * i + 1], org[3 * i + 2]}, 0.0f, {dir[3 * i], dir[3 * i + 1], dir[3 * i + 2]}, INFINITY, 0.0f};
+        hairobb_hit a, b, c;
+        int ga = hairobb_intersect1(bvh, &ray, &a), gb = hairobb_intersect1(loaded, &ray, &b), gc = hairobb_intersect1(refitted, &ray, &c);
+        hits += (size_t)ga;
+        differ += ga != gb || (ga && memcmp(&a, &b, sizeof a) != 0);
+        refit_differ += ga != gc || (ga && memcmp(&a, &c, sizeof a) != 0);
+    }
+    CHECK(hits > n / 20 && differ == 0, "save: a loaded round BVH gives the same hits (%zu of %zu differ, %zu hits)", differ, n, hits);
+    CHECK(refit_differ == 0, "refit: a refitted round BVH gives the same hits (%zu differ)", refit_differ);
+    /* the shape is in the file: an unknown one is refused */
+    if (buffer && size > 128) {
+        unsigned char *bytes = (unsigned char *)buffer;
+        hairobb_bvh *bad = NULL;
+        uint32_t two = 2;
+        memcpy(bytes + HAIROBB__AT_SHAPE, &two, 4);
+        hairobb__put64(bytes + size - 8, hairobb__save_checksum(bytes, size));   /* a lie with its checksum fixed */
+        CHECK(hairobb_load(buffer, size, s->vertices, s->vertex_count, s->indices, s->segment_count, NULL, &bad) == HAIROBB_ERROR_INVALID_FILE && !bad,
+              "save: an unknown shape in the file is refused");
+    }
+    hairobb_free(bvh);
+    hairobb_free(loaded);
+    hairobb_free(refitted);
+    free(buffer);
+    free(org);
+    free(dir);
+}
+
+/* Options a round BVH must refuse or keep. */
+static void test_options(void)
+{
+    static const float v[16] = {0, 0, 0, 0.1f, 1, 0, 0, 0.1f, 2, 0, 0, 0.1f, 3, 0, 0, 0.1f};
+    static const uint32_t idx[1] = {0};
+    hairobb_build_options o;
+    hairobb_bvh *bvh = NULL;
+    memset(&o, 0, sizeof o);
+    o.shape = (hairobb_shape)2;
+    CHECK(hairobb_build(v, 4, idx, 1, &o, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT && !bvh, "options: an unknown shape is refused");
+    o.shape = HAIROBB_SHAPE_ROUND;
+    o.precision = HAIROBB_PRECISION_PIECES;
+    CHECK(hairobb_build(v, 4, idx, 1, &o, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT && !bvh,
+          "options: round curves with the pieces precision are refused");
+}
+
 int main(void)
 {
     hair_scene s;
+    hairobb_build_options round;
+    memset(&round, 0, sizeof round);
+    round.shape = HAIROBB_SHAPE_ROUND;
     test_sheets();
+    test_options();
+    if (scene_combed(&s, 20000, 1) == 0) {
+        test_save_refit(&s);
+        compare_with_reference("combed", &s, &round);
+        scene_free(&s);
+    }
+    if (scene_curly(&s, 20000, 2) == 0) {
+        compare_with_reference("curly", &s, &round);
+        scene_free(&s);
+    }
+    if (scene_crossing(&s, 20000, 3) == 0) {
+        compare_with_reference("crossing", &s, &round);
+        scene_free(&s);
+    }
     if (scene_combed(&s, 20000, 1) == 0) {
         compare_with_embree("combed", &s);
         scene_free(&s);

@@ -5,7 +5,8 @@
    compared field by field, bit for bit, on several scenes, node policies and
    intersector precisions, curve bases read with and without the Bezier
    copy, and on moving hair (motion blur: rotating and translating fur, 2
-   to 4 time steps) at random ray times. */
+   to 4 time steps) at random ray times, and round curves (tubes), still
+   and moving. */
 #define _POSIX_C_SOURCE 200809L
 #include "simd_variant.h"
 #include "check.h"
@@ -150,11 +151,12 @@ static void compare_paths(const hair_scene *s, const hairobb_build_options *opti
    traced at random times with several option sets. */
 static void compare_motion(const hair_scene *s, scene_motion motion, double amount, int time_steps)
 {
-    static const struct { const char *name; hairobb_node_policy nodes; hairobb_obb_layout layout; hairobb_precision precision; unsigned pieces; } sets[] = {
-        {"mixed", HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 0},
-        {"aabb-only", HAIROBB_NODES_AABB_ONLY, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 0},
-        {"obb-only, shared rotation", HAIROBB_NODES_OBB_ONLY, HAIROBB_OBB_SHARED_ROTATION, HAIROBB_PRECISION_EXACT, 0},
-        {"compressed, pieces=4", HAIROBB_NODES_MIXED, HAIROBB_OBB_COMPRESSED, HAIROBB_PRECISION_PIECES, 4},
+    static const struct { const char *name; hairobb_node_policy nodes; hairobb_obb_layout layout; hairobb_precision precision; unsigned pieces; hairobb_shape shape; } sets[] = {
+        {"mixed", HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 0, HAIROBB_SHAPE_RIBBON},
+        {"aabb-only", HAIROBB_NODES_AABB_ONLY, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 0, HAIROBB_SHAPE_RIBBON},
+        {"obb-only, shared rotation", HAIROBB_NODES_OBB_ONLY, HAIROBB_OBB_SHARED_ROTATION, HAIROBB_PRECISION_EXACT, 0, HAIROBB_SHAPE_RIBBON},
+        {"compressed, pieces=4", HAIROBB_NODES_MIXED, HAIROBB_OBB_COMPRESSED, HAIROBB_PRECISION_PIECES, 4, HAIROBB_SHAPE_RIBBON},
+        {"round curves", HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 0, HAIROBB_SHAPE_ROUND},
     };
     float *steps[4];
     size_t k;
@@ -170,6 +172,7 @@ static void compare_motion(const hair_scene *s, scene_motion motion, double amou
         options.obb_layout = sets[k].layout;
         options.precision = sets[k].precision;
         options.curve_pieces = sets[k].pieces;
+        options.shape = sets[k].shape;
         options.time_steps = (unsigned)time_steps;
         options.time_vertices = (const float *const *)steps;
         snprintf(what, sizeof what, "%s %.2g T=%d, %s", motion == SCENE_MOTION_ROTATE ? "rotate" : "shift", amount, time_steps,
@@ -225,6 +228,9 @@ int main(void)
             compare_paths(&scenes[k], &options, "per-child float OBBs");
             options.obb_layout = HAIROBB_OBB_COMPRESSED;
             compare_paths(&scenes[k], &options, "compressed, shared byte rotation");
+            options.obb_layout = HAIROBB_OBB_DEFAULT;
+            options.shape = HAIROBB_SHAPE_ROUND;
+            compare_paths(&scenes[k], &options, "round curves (tubes)");
         }
         {
             /* Bezier without the copy (the caller's arrays), other bases
