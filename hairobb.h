@@ -179,11 +179,12 @@
      fatter where the radius tapers). The ends are open. Both sheets count:
      a ray meets the entry at t = (z(u) - S)/|dir| and the exit at (z(u) +
      S)/|dir|, S = sqrt(r^2 - |P2|^2), where the circle's plane meets the
-     ray on the circle. The intersector samples each sheet's equation at
-     33 values of u and refines each sign change by bisection: a ray that
-     grazes a tube, entering and leaving within one step, can be missed
-     (about 1 ray in 16,000 of the tests' camera rays). Round curves take
-     the exact precision only (PIECES: INVALID_ARGUMENT).
+     ray on the circle. The intersector finds the intervals of u where the
+     ray passes within r of the centre line, then each sheet's roots in
+     them by sign changes and bisection; a ray within about 1e-3 r of a
+     tube's silhouette is decided by the float rounding of the points in
+     ray space. Round curves take the exact precision only (PIECES:
+     INVALID_ARGUMENT).
 
 
    6. HITS
@@ -6967,19 +6968,24 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
    r(u) about the centre line in the plane normal to its tangent. In ray
    space, with P2 = (x, y) and w = x x' + y y', that plane meets the ray at
    depth z + w / z', and the ray meets the circle where w^2 = z'^2 (r^2 -
-   |P2|^2). With S = sqrt(r^2 - |P2|^2) where the ray passes within r of
-   the centre (|P2| <= r), the two sheets are the roots of
+   |P2|^2). Hits lie where the ray passes within r of the centre, q = |P2|^2
+   - r^2 <= 0: the inside intervals of u. There, with S = sqrt(-q), the two
+   sheets are the roots of
        g(u) = w + sheet z' S:   sheet +1, the entry, at depth z - S;
                                 sheet -1, the exit,  at depth z + S.
-   g is continuous (S is 0 outside, where g = w); a root where |P2| > r is a
-   root of w alone, not a hit. g is sampled at HAIROBB__TUBE_SAMPLES + 1
-   values of u and each sign change refined by bisection, which needs no
-   derivative (S's is infinite at the tube's silhouette). Two roots of one
-   sheet within one sample step (a ray grazing the tube) can be missed. */
-#define HAIROBB__TUBE_SAMPLES 32
+   The inside intervals are found from q at HAIROBB__TUBE_SAMPLES + 1 values
+   of u, their ends refined by bisection; a minimum of q between two
+   samples (q' = 2 (w - r r') changes sign there) is found too, so a ray
+   that grazes the tube between samples is not lost. Each inside interval
+   is sampled again at HAIROBB__TUBE_INSIDE_SAMPLES + 1 values, and each
+   sign change of g refined by bisection, which needs no derivative (S's is
+   infinite at the interval's ends): regula falsi. Two roots of one sheet
+   within one step of an inside interval can still be missed. */
+#define HAIROBB__TUBE_SAMPLES 16
+#define HAIROBB__TUBE_INSIDE_SAMPLES 8
 
-/* at u: out = w, z', z, S, |P2|^2 - r^2 */
-static void hairobb__tube_at(const hairobb__ray_poly *p, float u, float out[5])
+/* at u: out = w, z', z, S, q = |P2|^2 - r^2, q' / 2 = w - r r' */
+static void hairobb__tube_at(const hairobb__ray_poly *p, float u, float out[6])
 {
     hairobb__v4 d1, value = hairobb__horner(p, hairobb__v4_set1(u), &d1, NULL);
     float v[4], d[4], r, q;
@@ -6992,30 +6998,62 @@ static void hairobb__tube_at(const hairobb__ray_poly *p, float u, float out[5])
     out[2] = v[2];
     out[3] = q < 0.0f ? sqrtf(-q) : 0.0f;
     out[4] = q;
+    out[5] = out[0] - r * d[3];
 }
 
-static float hairobb__tube_g(const float at[5], float sheet) { return at[0] + sheet * at[1] * at[3]; }
+static float hairobb__tube_g(const float at[6], float sheet) { return at[0] + sheet * at[1] * at[3]; }
 
-/* The root of a sheet's g in [lo, hi], where it changes sign (g_lo at lo). */
-static float hairobb__tube_root(const hairobb__ray_poly *p, float lo, float hi, float g_lo, float sheet)
+/* A point in [lo, hi] where q (which 2) or q' (which 3) changes sign (f_lo
+   at lo), to 2^-14 of the step: it only bounds the intervals g is sampled
+   in, where g is continuous whatever side of it the point falls. */
+static float hairobb__tube_split(const hairobb__ray_poly *p, float lo, float hi, float f_lo, int which)
 {
     int iteration;
-    for (iteration = 0; iteration < 40; ++iteration) {
-        float middle = 0.5f * (lo + hi), at[5], g;
-        if (middle <= lo || middle >= hi) break;
+    for (iteration = 0; iteration < 10; ++iteration) {
+        float middle = 0.5f * (lo + hi), at[6], f;
         hairobb__tube_at(p, middle, at);
-        g = hairobb__tube_g(at, sheet);
-        if (g == 0.0f) return middle;
-        if ((g < 0.0f) == (g_lo < 0.0f)) lo = middle; else hi = middle;
+        f = at[which + 2];
+        if (f == 0.0f) return middle;
+        if ((f < 0.0f) == (f_lo < 0.0f)) lo = middle; else hi = middle;
     }
     return 0.5f * (lo + hi);
+}
+
+/* The root of a sheet's g in [lo, hi], where it changes sign (g_lo at lo,
+   g_hi at hi): regula falsi with the Illinois rule (no derivative: S's is
+   infinite where the ray leaves the tube's reach), to the float spacing
+   of u or 30 steps. */
+static float hairobb__tube_root(const hairobb__ray_poly *p, float lo, float hi, float g_lo, float g_hi, float sheet)
+{
+    int iteration, side = 0;
+    float u = lo;
+    for (iteration = 0; iteration < 30; ++iteration) {
+        float at[6], g;
+        u = lo + (hi - lo) * (g_lo / (g_lo - g_hi));
+        if (!(u > lo && u < hi)) u = 0.5f * (lo + hi);
+        if (u <= lo || u >= hi) break;
+        hairobb__tube_at(p, u, at);
+        g = hairobb__tube_g(at, sheet);
+        if (g == 0.0f) return u;
+        if ((g < 0.0f) == (g_lo < 0.0f)) {
+            lo = u;
+            g_lo = g;
+            if (side == -1) g_hi *= 0.5f;
+            side = -1;
+        } else {
+            hi = u;
+            g_hi = g;
+            if (side == 1) g_lo *= 0.5f;
+            side = 1;
+        }
+    }
+    return u;
 }
 
 /* Records a sheet's hit at u if the ray passes within r of the centre there. */
 static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__ray_poly *p, uint32_t prim, float u, float sheet)
 {
-    float at[5];
-    float t;
+    float at[6], t;
     hairobb__tube_at(p, u, at);
     if (!(at[4] <= 0.0f)) return 0;
     t = (at[2] - sheet * at[3]) * rs->inv_dir_length;
@@ -7023,28 +7061,81 @@ static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__ray_poly *p,
     return hairobb__accept(rs, prim, u, t, 0.0f, 0.0f, 0.0f);
 }
 
-static int hairobb__intersect_tube(hairobb__ray_state *rs, const hairobb__ray_curve *c, uint32_t prim, int any_hit)
+/* Both sheets' roots in the inside interval [a, b]. */
+static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__ray_poly *p, uint32_t prim, float a, float b, int any_hit)
 {
-    hairobb__ray_poly poly;
-    float previous[5], current[5], u_previous = 0.0f;
+    float previous[6], current[6], u_previous = a, sheet;
     int k, found = 0;
-    hairobb__to_power_form(c, &poly);
-    hairobb__tube_at(&poly, 0.0f, previous);
-    for (k = 1; k <= HAIROBB__TUBE_SAMPLES; ++k) {
-        float u = (float)k / (float)HAIROBB__TUBE_SAMPLES, sheet;
-        hairobb__tube_at(&poly, u, current);
+    hairobb__tube_at(p, a, previous);
+    for (k = 1; k <= HAIROBB__TUBE_INSIDE_SAMPLES; ++k) {
+        float u = k == HAIROBB__TUBE_INSIDE_SAMPLES ? b : a + (b - a) * ((float)k / (float)HAIROBB__TUBE_INSIDE_SAMPLES);
+        hairobb__tube_at(p, u, current);
         for (sheet = 1.0f; sheet >= -1.0f; sheet -= 2.0f) {
             float g0 = hairobb__tube_g(previous, sheet), g1 = hairobb__tube_g(current, sheet);
-            if (k == 1 && g0 == 0.0f) found |= hairobb__tube_hit(rs, &poly, prim, 0.0f, sheet);
+            if (k == 1 && g0 == 0.0f) found |= hairobb__tube_hit(rs, p, prim, a, sheet);
             if (g1 == 0.0f)
-                found |= hairobb__tube_hit(rs, &poly, prim, u, sheet);
+                found |= hairobb__tube_hit(rs, p, prim, u, sheet);
             else if (g0 != 0.0f && (g0 < 0.0f) != (g1 < 0.0f))
-                found |= hairobb__tube_hit(rs, &poly, prim, hairobb__tube_root(&poly, u_previous, u, g0, sheet), sheet);
+                found |= hairobb__tube_hit(rs, p, prim, hairobb__tube_root(p, u_previous, u, g0, g1, sheet), sheet);
             if (found && any_hit) return 1;
         }
         memcpy(previous, current, sizeof previous);
         u_previous = u;
     }
+    return found;
+}
+
+/* The Bernstein coefficients of a^2 - b^2 (degree 6) for cubics a, b in
+   Bernstein form, summed into out (x^2 + y^2 - r^2 = q in two calls). */
+static void hairobb__tube_squares(const float a[4], float sign, float out[7])
+{
+    out[0] += sign * (a[0] * a[0]);
+    out[1] += sign * (a[0] * a[1]);
+    out[2] += sign * ((6.0f * a[0] * a[2] + 9.0f * a[1] * a[1]) * (1.0f / 15.0f));
+    out[3] += sign * ((2.0f * a[0] * a[3] + 18.0f * a[1] * a[2]) * (1.0f / 20.0f));
+    out[4] += sign * ((6.0f * a[1] * a[3] + 9.0f * a[2] * a[2]) * (1.0f / 15.0f));
+    out[5] += sign * (a[2] * a[3]);
+    out[6] += sign * (a[3] * a[3]);
+}
+
+static int hairobb__intersect_tube(hairobb__ray_state *rs, const hairobb__ray_curve *c, uint32_t prim, int any_hit)
+{
+    hairobb__ray_poly poly;
+    float previous[6], current[6], u_previous = 0.0f, start = -1.0f, bernstein[7] = {0, 0, 0, 0, 0, 0, 0}, scale = 0.0f;
+    int k, found = 0;
+    /* q's Bernstein coefficients bound it: all of them clearly positive,
+       the ray passes farther than r from the centre line everywhere (most
+       segments that pass the ribbon's cull) */
+    hairobb__tube_squares(c->x, 1.0f, bernstein);
+    hairobb__tube_squares(c->y, 1.0f, bernstein);
+    for (k = 0; k < 4; ++k) scale = hairobb__maxf(scale, hairobb__maxf(c->x[k] * c->x[k] + c->y[k] * c->y[k], c->r[k] * c->r[k]));
+    hairobb__tube_squares(c->r, -1.0f, bernstein);
+    for (k = 0; k < 7 && bernstein[k] > scale * (64.0f * FLT_EPSILON); ++k) {}
+    if (k == 7) return 0;
+    hairobb__to_power_form(c, &poly);
+    hairobb__tube_at(&poly, 0.0f, previous);
+    if (previous[4] < 0.0f) start = 0.0f;   /* inside at the open end */
+    for (k = 1; k <= HAIROBB__TUBE_SAMPLES; ++k) {
+        float u = (float)k / (float)HAIROBB__TUBE_SAMPLES;
+        hairobb__tube_at(&poly, u, current);
+        if (start < 0.0f && current[4] < 0.0f) {   /* into an inside interval */
+            start = hairobb__tube_split(&poly, u_previous, u, previous[4], 2);
+        } else if (start >= 0.0f && !(current[4] < 0.0f)) {   /* out of it */
+            found |= hairobb__tube_inside(rs, &poly, prim, start, hairobb__tube_split(&poly, u_previous, u, previous[4], 2), any_hit);
+            start = -1.0f;
+        } else if (start < 0.0f && previous[5] < 0.0f && current[5] > 0.0f) {
+            /* both outside, but q has a minimum between them: inside there? */
+            float low = hairobb__tube_split(&poly, u_previous, u, previous[5], 3), at[6];
+            hairobb__tube_at(&poly, low, at);
+            if (at[4] < 0.0f)
+                found |= hairobb__tube_inside(rs, &poly, prim, hairobb__tube_split(&poly, u_previous, low, previous[4], 2),
+                                              hairobb__tube_split(&poly, low, u, at[4], 2), any_hit);
+        }
+        if (found && any_hit) return 1;
+        memcpy(previous, current, sizeof previous);
+        u_previous = u;
+    }
+    if (start >= 0.0f) found |= hairobb__tube_inside(rs, &poly, prim, start, 1.0f, any_hit);   /* inside at the other open end */
     return found;
 }
 
@@ -7379,7 +7470,10 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__tube_at hairobb__tube_at_avx2
 #define hairobb__tube_g hairobb__tube_g_avx2
 #define hairobb__tube_hit hairobb__tube_hit_avx2
+#define hairobb__tube_inside hairobb__tube_inside_avx2
 #define hairobb__tube_root hairobb__tube_root_avx2
+#define hairobb__tube_split hairobb__tube_split_avx2
+#define hairobb__tube_squares hairobb__tube_squares_avx2
 #define hairobb__joint_at hairobb__joint_at_avx2
 #define hairobb__made_moving hairobb__made_moving_avx2
 #define hairobb__piece_ends hairobb__piece_ends_avx2

@@ -149,10 +149,11 @@ typedef struct variant {
     hairobb_basis basis;
     hairobb_switch bezier_copy;
     unsigned embree_flags; /* Embree: RTC_SCENE_FLAG_* (compact, robust); 0 = none */
+    hairobb_shape shape;   /* hairobb: ribbons, or tubes (round) */
 } variant;
 
 /* the rows of all_variants (variants.c checks the count); result arrays are this long */
-enum { VARIANT_COUNT = 29 };
+enum { VARIANT_COUNT = 30 };
 extern const variant all_variants[];
 
 /* The baseline of every ratio */

@@ -37,13 +37,15 @@ static void print_help(void)
            "                        spatial-compressed-cluster, shared, compressed-shared,\n"
            "                        build-1t (defaults built on 1 thread), filter (a hit filter taking every hit),\n"
            "                        sse2 (the SSE2 kernels, where the build has them: not with -mavx2 or -march)\n"
+           "                        round (round curves: tubes, HAIROBB_SHAPE_ROUND; the peer of embree-round),\n"
            "                        catmull-rom, catmull-rom-copy (Catmull-Rom basis, without and with the Bezier\n"
            "                        copy: on Bezier scenes other curves through the same points),\n"
            "                        b-spline, b-spline-copy (the same for the uniform B-spline basis)\n"
            "                      Embree: embree-r4 (flat, rate 4: Embree's default, the baseline of every ratio),\n"
            "                        embree-r8, embree-r16 (flat), embree-round, embree-avx2, and the peers\n"
            "                        embree-compact and embree-cycles (below)\n"
-           "                      groups: all, hairobb, embree, precision, ablation, bases, scale (default, embree-r4,\n"
+           "                      groups: all, hairobb, embree, precision, ablation, bases, tubes (round, embree-round,\n"
+           "                        default, embree-r4), scale (default, embree-r4,\n"
            "                        embree-compact), yeti (catmull-rom: hairobb C-R without the Bezier copy,\n"
            "                        embree-r4, embree-cycles, embree-round)\n",
            DEFAULT_SEGMENTS, DEFAULT_RESOLUTION);

@@ -9,19 +9,19 @@
 
 #define HAIROBB_ROW(key, label, nodes, layout, spatial, cluster, precision, pieces, on_chart) \
     {key, label, LIB_HAIROBB, HAIROBB_NODES_##nodes, HAIROBB_##layout, HAIROBB_PRECISION_##precision, pieces, \
-     HAIROBB_##spatial, HAIROBB_##cluster, 0, 0, 1, on_chart, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_BEZIER, HAIROBB_AUTO, 0}
+     HAIROBB_##spatial, HAIROBB_##cluster, 0, 0, 1, on_chart, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_BEZIER, HAIROBB_AUTO, 0, HAIROBB_SHAPE_RIBBON}
 /* the defaults built on one thread (the build's speed-up), with a filter, or
    traced by the SSE2 kernels (what CPUs without AVX2 get) */
 #define HAIROBB_DEFAULTS_ROW(key, label, build_threads, hit_filter, simd) \
     {key, label, LIB_HAIROBB, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 8, HAIROBB_AUTO, HAIROBB_AUTO, \
-     0, 0, 1, 0, build_threads, hit_filter, HAIROBB_SIMD_##simd, HAIROBB_BASIS_BEZIER, HAIROBB_AUTO, 0}
+     0, 0, 1, 0, build_threads, hit_filter, HAIROBB_SIMD_##simd, HAIROBB_BASIS_BEZIER, HAIROBB_AUTO, 0, HAIROBB_SHAPE_RIBBON}
 /* Embree's curves: type, tessellation rate, scene flags */
 #define EMBREE_ROW(key, label, type, rate, flags, comparable, on_chart) \
     {key, label, LIB_EMBREE, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 0, HAIROBB_AUTO, HAIROBB_AUTO, \
-     type, rate, comparable, on_chart, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_BEZIER, HAIROBB_AUTO, flags}
+     type, rate, comparable, on_chart, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_BEZIER, HAIROBB_AUTO, flags, HAIROBB_SHAPE_RIBBON}
 #define HAIROBB_BASIS_ROW(key, label, basis, copy) \
     {key, label, LIB_HAIROBB, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 8, HAIROBB_AUTO, HAIROBB_AUTO, \
-     0, 0, 0, 0, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_##basis, HAIROBB_##copy, 0}
+     0, 0, 0, 0, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_##basis, HAIROBB_##copy, 0, HAIROBB_SHAPE_RIBBON}
 const variant all_variants[] = {
     /* precision points: exact and pieces-only intersectors, 4 to 16 pieces */
     HAIROBB_ROW("default", "hairobb default", MIXED, OBB_DEFAULT, AUTO, AUTO, EXACT, 8, 1),
@@ -45,7 +45,10 @@ const variant all_variants[] = {
     HAIROBB_DEFAULTS_ROW("sse2", "hairobb SSE2 path", 0, 0, SSE2),
     /* the defaults without the copy (bezier_copy OFF): the caller's arrays read where they are */
     {"no-copy", "hairobb no copy", LIB_HAIROBB, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 8, HAIROBB_AUTO,
-     HAIROBB_AUTO, 0, 0, 1, 0, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_BEZIER, HAIROBB_OFF, 0},
+     HAIROBB_AUTO, 0, 0, 1, 0, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_BEZIER, HAIROBB_OFF, 0, HAIROBB_SHAPE_RIBBON},
+    /* round curves (tubes): the peer of embree-round, not of the ribbon reference */
+    {"round", "hairobb round *", LIB_HAIROBB, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 8, HAIROBB_AUTO,
+     HAIROBB_AUTO, 0, 0, 0, 0, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_BEZIER, HAIROBB_AUTO, 0, HAIROBB_SHAPE_ROUND},
     HAIROBB_BASIS_ROW("catmull-rom", "hairobb C-R no copy", CATMULL_ROM, OFF),
     HAIROBB_BASIS_ROW("catmull-rom-copy", "hairobb C-R + copy", CATMULL_ROM, ON),
     HAIROBB_BASIS_ROW("b-spline", "hairobb B-sp no copy", BSPLINE, OFF),
@@ -72,14 +75,16 @@ typedef char variant_table_has_VARIANT_COUNT_rows[sizeof all_variants / sizeof a
 /* Named groups for --variants; "mixed" is the default variant by another name. */
 static const struct { const char *name, *members; } variant_groups[] = {
     {"all", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
-            "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2,no-copy,embree-r4,embree-r8,embree-r16,"
+            "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2,no-copy,round,embree-r4,embree-r8,embree-r16,"
             "embree-compact,embree-cycles,embree-round,embree-avx2"},
     {"hairobb", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
-                "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2,no-copy"},
+                "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2,no-copy,round"},
     {"embree", "embree-r4,embree-r8,embree-r16,embree-compact,embree-cycles,embree-round,embree-avx2"},
     {"precision", "default,exact4,exact16,pieces4,pieces8,pieces16"},
     {"ablation", "aabb,obb,mixed-uncompressed,spatial,spatial-compressed,spatial-compressed-cluster,shared,compressed-shared,default"},
     {"mixed", "default"},
+    /* round curves: hairobb's tubes and Embree's, and the ribbons of both */
+    {"tubes", "round,embree-round,default,embree-r4"},
     {"bases", "default,catmull-rom,catmull-rom-copy,b-spline,b-spline-copy"},
     /* a Catmull-Rom scene (yeti) without --variants: hairobb without the copy, Embree on the same buffers
        (embree-cycles: Cycles' own curves there, flat Catmull-Rom) */
@@ -216,6 +221,7 @@ hairobb_bvh *build_hairobb(const hair_scene *s, const variant *v, double *second
     build_options.simd = v->simd;
     build_options.basis = variant_basis(v, s);
     build_options.bezier_copy = v->bezier_copy;
+    build_options.shape = v->shape;
     return build_metered(s, s->vertices, &build_options, v->key, seconds, transient_bytes);
 }
 

@@ -179,7 +179,7 @@ static void test_sheets(void)
    tube within the band). */
 static void compare_with_reference(const char *name, hair_scene *s, const hairobb_build_options *options)
 {
-    size_t n = (size_t)SIDE * SIDE, i, both = 0, disagree = 0, inward = 0, inward_bad = 0, outward = 0, outward_self = 0, v_bad = 0;
+    size_t n = (size_t)SIDE * SIDE, i, both = 0, disagree = 0, at_edge = 0, inward = 0, inward_bad = 0, outward = 0, outward_self = 0, v_bad = 0;
     float *org = (float *)malloc(3 * sizeof(float) * n), *dir = (float *)malloc(3 * sizeof(float) * n);
     double *error = (double *)malloc(sizeof(double) * n), worst_inward = 0.0;
     boxes b;
@@ -198,6 +198,23 @@ static void compare_with_reference(const char *name, hair_scene *s, const hairob
         reference = nearest(s, &b, org + 3 * i, dir + 3 * i, &want);
         got = hairobb_intersect1(bvh, &ray, &hit);
         if (got != reference) {
+            /* a ray through the tube within 1e-3 r of its silhouette (a
+               chord under 0.09 r) is decided by the float rounding of the
+               points in ray space: counted apart */
+            int edge = 0;
+            if (reference) {
+                ref__ray rr;
+                ref_tube_hit all[REF_TUBE_MAX_ROOTS], first;
+                int count = 0, j;
+                ref__ray_setup(&rr, ray.org, ray.dir);
+                ref_tube_segment_hit(&rr, s->vertices + 4 * (size_t)s->indices[want.prim_id], 0.0, INFINITY, &first, all, &count);
+                for (j = 0; j < count; ++j)
+                    if (all[j].exit && all[j].t > want.t && (all[j].t - want.t) * rr.dir_len < 0.09 * want.r) edge = 1;
+            }
+            if (edge) {
+                ++at_edge;
+                continue;
+            }
             if (disagree < 3) printf("  %s: ray %zu: reference %d (prim %u t %.9g), hairobb %d (prim %u t %.9g)\n", name, i, reference,
                                      want.prim_id, want.t, got, hit.prim_id, (double)hit.t);
             ++disagree;
@@ -253,13 +270,14 @@ static void compare_with_reference(const char *name, hair_scene *s, const hairob
         }
     }
     qsort(error, both, sizeof *error, compare_doubles);
-    printf("%s: hairobb's tubes against the reference: %zu of %zu rays disagree on hit or miss; |dt|/r median %.3g, p99 %.3g, "
-           "max %.3g over %zu hits; into the fibre %zu rays, %zu without its far side (worst |dt|/r %.3g); reflected %zu, %zu back "
-           "on their tube\n",
-           name, disagree, n, both ? error[both / 2] : 0.0, both ? error[(size_t)(0.99 * (double)(both - 1))] : 0.0,
+    printf("%s: hairobb's tubes against the reference: %zu of %zu rays disagree on hit or miss (%zu more within 1e-3 r of a "
+           "silhouette); |dt|/r median %.3g, p99 %.3g, max %.3g over %zu hits; into the fibre %zu rays, %zu without its far side "
+           "(worst |dt|/r %.3g); reflected %zu, %zu back on their tube\n",
+           name, disagree, n, at_edge, both ? error[both / 2] : 0.0, both ? error[(size_t)(0.99 * (double)(both - 1))] : 0.0,
            both ? error[both - 1] : 0.0, both, inward, inward_bad, worst_inward, outward, outward_self);
     CHECK(both > n / 20, "%s: %zu hits", name, both);
-    CHECK(disagree <= n / 2000, "%s: %zu of %zu rays disagree with the tube reference", name, disagree, n);
+    CHECK(disagree == 0 && at_edge <= n / 2000, "%s: %zu of %zu rays disagree with the tube reference (%zu at a silhouette)", name,
+          disagree, n, at_edge);
     CHECK(both && error[(size_t)(0.99 * (double)(both - 1))] <= 2e-3, "%s: |dt|/r p99 %.3g", name,
           both ? error[(size_t)(0.99 * (double)(both - 1))] : 0.0);
     CHECK(v_bad <= both / 1000, "%s: v off the reference's on %zu hits", name, v_bad);
