@@ -261,4 +261,45 @@ static inline int ref_tube_intersect(const float *vertices, const uint32_t *indi
     return found;
 }
 
+/* The first tube hit over a scene built by ref_build (reference.h): its
+   boxes (control points dilated by the largest radius) hold the tubes as
+   they hold the ribbons. Ties in t go to the smaller prim id. */
+static inline int ref_tube_intersect_scene(const ref_scene *s, const float org[3], const float dir[3], double tnear, double tfar,
+                                           ref_tube_hit *hit)
+{
+    ref__ray ray;
+    uint32_t stack[REF_STACK_SIZE];
+    int sp = 0, found = 0;
+    ref__ray_setup(&ray, org, dir);
+    hit->prim_id = REF_INVALID_ID;
+    if (s && s->node_count > 0 && ray.valid) stack[sp++] = 0;
+    while (sp > 0) {
+        const ref__node *node = &s->nodes[stack[--sp]];
+        if (!ref__box_hit(&ray, node->lo, node->hi, tnear, found ? hit->t : tfar)) continue;
+        if (node->count > 0) {
+            uint32_t i;
+            for (i = 0; i < node->count; ++i) {
+                uint32_t prim = s->prims[node->right_or_first + i];
+                ref_tube_hit h;
+                if (!ref_tube_segment_hit(&ray, s->vertices + 4 * (size_t)s->indices[prim], tnear, found ? hit->t : tfar, &h, NULL, NULL))
+                    continue;
+                if (found && !(h.t < hit->t || (h.t == hit->t && prim < hit->prim_id))) continue;
+                *hit = h;
+                hit->prim_id = prim;
+                found = 1;
+            }
+        } else {
+            uint32_t left = (uint32_t)(node - s->nodes) + 1, right = node->right_or_first;
+            if (ray.dir[node->axis] >= 0.0) {
+                stack[sp++] = right;
+                stack[sp++] = left;
+            } else {
+                stack[sp++] = left;
+                stack[sp++] = right;
+            }
+        }
+    }
+    return found;
+}
+
 #endif

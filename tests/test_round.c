@@ -1,8 +1,10 @@
 /* test_round.c - round curves (tubes, HAIROBB_SHAPE_ROUND): hairobb's tubes
-   against the double-precision tube reference (ref_tube.h) on camera rays
-   and on secondary rays leaving their hits (into the fibre: its far side;
-   out of it: never its own tube again), and the reference against Embree's
-   round Bezier curves on the same hair and rays. Embree's cubic round curve is the swept circle the reference
+   against the double-precision tube reference (ref_tube.h) on combed, curly
+   and crossing fur, straight.hair and furBall_A, camera rays and secondary
+   rays leaving their hits (into the fibre: its far side; out of it: never
+   its own tube again); save, load and refit; refused options; and the
+   reference against Embree's round Bezier curves on the same hair and
+   rays. Embree's cubic round curve is the swept circle the reference
    defines, so the two must agree on which rays hit and where, to Embree's
    own accuracy (its Newton iteration stops at a few ulps and gives up on
    some rays). The figures are printed: hit/miss disagreements (Embree's
@@ -18,6 +20,7 @@
 #include "embree_wrap.h"
 #include "ref_tube.h"
 #include "scenes.h"
+#include "test_data.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -30,92 +33,20 @@ static int compare_doubles(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-/* Each segment's box (control points dilated by their largest radius): the
-   tube lies inside it. */
-typedef struct boxes {
-    double *lo, *hi;
-} boxes;
-
-static void make_boxes(const hair_scene *s, boxes *b)
-{
-    size_t i;
-    b->lo = (double *)malloc(3 * sizeof(double) * s->segment_count);
-    b->hi = (double *)malloc(3 * sizeof(double) * s->segment_count);
-    for (i = 0; i < s->segment_count; ++i) {
-        const float *p = s->vertices + 4 * (size_t)s->indices[i];
-        double r = 0.0;
-        int j, k;
-        for (j = 0; j < 4; ++j) r = p[4 * j + 3] > r ? p[4 * j + 3] : r;
-        for (k = 0; k < 3; ++k) {
-            b->lo[3 * i + k] = b->hi[3 * i + k] = p[k];
-            for (j = 1; j < 4; ++j) {
-                b->lo[3 * i + k] = p[4 * j + k] < b->lo[3 * i + k] ? p[4 * j + k] : b->lo[3 * i + k];
-                b->hi[3 * i + k] = p[4 * j + k] > b->hi[3 * i + k] ? p[4 * j + k] : b->hi[3 * i + k];
-            }
-            b->lo[3 * i + k] -= r * (1.0 + 1e-9) + 1e-12;
-            b->hi[3 * i + k] += r * (1.0 + 1e-9) + 1e-12;
-        }
-    }
-}
-
-static int box_hit(const double lo[3], const double hi[3], const double o[3], const double d[3], double tfar)
-{
-    double t0 = 0.0, t1 = tfar;
-    int k;
-    for (k = 0; k < 3; ++k) {
-        if (d[k] == 0.0) {
-            if (o[k] < lo[k] || o[k] > hi[k]) return 0;
-            continue;
-        }
-        {
-            double a = (lo[k] - o[k]) / d[k], b = (hi[k] - o[k]) / d[k];
-            if (a > b) { double c = a; a = b; b = c; }
-            t0 = a > t0 ? a : t0;
-            t1 = b < t1 ? b : t1;
-        }
-    }
-    return t0 <= t1 * (1.0 + 1e-9);
-}
-
-/* The nearest tube hit over the scene: segments whose box the ray enters,
-   each tested by the reference. */
-static int nearest(const hair_scene *s, const boxes *b, const float org[3], const float dir[3], ref_tube_hit *best)
-{
-    ref__ray ray;
-    double o[3], d[3];
-    size_t i;
-    int found = 0, k;
-    ref__ray_setup(&ray, org, dir);
-    for (k = 0; k < 3; ++k) { o[k] = org[k]; d[k] = dir[k]; }
-    for (i = 0; i < s->segment_count; ++i) {
-        ref_tube_hit h;
-        if (!box_hit(b->lo + 3 * i, b->hi + 3 * i, o, d, found ? best->t : HUGE_VAL)) continue;
-        if (!ref_tube_segment_hit(&ray, s->vertices + 4 * (size_t)s->indices[i], 0.0, found ? best->t : INFINITY, &h, NULL, NULL))
-            continue;
-        if (found && h.t == best->t && (uint32_t)i > best->prim_id) continue;
-        *best = h;
-        best->prim_id = (uint32_t)i;
-        found = 1;
-    }
-    return found;
-}
-
 static void compare_with_embree(const char *name, hair_scene *s)
 {
     size_t n = (size_t)SIDE * SIDE, i, both = 0, holes = 0, extra = 0, exits = 0, open_ends = 0;
     float *org = (float *)malloc(3 * sizeof(float) * n), *dir = (float *)malloc(3 * sizeof(float) * n);
     double *error = (double *)malloc(sizeof(double) * n);
-    boxes b;
+    ref_scene *reference_scene = ref_build(s->vertices, s->vertex_count, s->indices, s->segment_count);
     emb_scene *e = emb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, EMB_ROUND_BEZIER, 0, 0, NULL, NULL);
-    CHECK(e != NULL, "%s: Embree builds its round curves", name);
-    if (!e || !org || !dir || !error) return;
-    make_boxes(s, &b);
+    CHECK(e != NULL && reference_scene != NULL, "%s: Embree builds its round curves", name);
+    if (!e || !org || !dir || !error || !reference_scene) return;
     scene_camera_rays(s, SIDE, SIDE, org, dir);
     for (i = 0; i < n; ++i) {
         ref_tube_hit want;
         float t = 0.0f;
-        want.prim_id = REF_INVALID_ID;
-        int reference = nearest(s, &b, org + 3 * i, dir + 3 * i, &want);
+        int reference = ref_tube_intersect_scene(reference_scene, org + 3 * i, dir + 3 * i, 0.0, INFINITY, &want);
         int embree = emb_intersect(e, org + 3 * i, 0.0f, dir + 3 * i, INFINITY, &t, NULL, NULL, NULL);
         if (reference && embree) error[both++] = fabs((double)t - want.t) / want.r;
         holes += reference && !embree;
@@ -146,8 +77,7 @@ static void compare_with_embree(const char *name, hair_scene *s)
     printf("%s: %zu rays came in through a strand's open end and first met an exit sheet\n", name, open_ends);
     CHECK(exits == 0, "%s: %zu camera rays meet an exit sheet first away from a strand's ends", name, exits);
     emb_free(e);
-    free(b.lo);
-    free(b.hi);
+    ref_free(reference_scene);
     free(org);
     free(dir);
     free(error);
@@ -182,20 +112,18 @@ static void compare_with_reference(const char *name, hair_scene *s, const hairob
     size_t n = (size_t)SIDE * SIDE, i, both = 0, disagree = 0, at_edge = 0, inward = 0, inward_bad = 0, outward = 0, outward_self = 0, v_bad = 0;
     float *org = (float *)malloc(3 * sizeof(float) * n), *dir = (float *)malloc(3 * sizeof(float) * n);
     double *error = (double *)malloc(sizeof(double) * n), worst_inward = 0.0;
-    boxes b;
+    ref_scene *reference_scene = ref_build(s->vertices, s->vertex_count, s->indices, s->segment_count);
     hairobb_bvh *bvh = NULL;
     CHECK(hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, options, &bvh) == HAIROBB_OK,
           "%s: builds with round curves", name);
-    if (!bvh || !org || !dir || !error) return;
-    make_boxes(s, &b);
+    if (!bvh || !org || !dir || !error || !reference_scene) return;
     scene_camera_rays(s, SIDE, SIDE, org, dir);
     for (i = 0; i < n; ++i) {
         ref_tube_hit want;
         hairobb_ray ray = {{org[3 * i], org[3 * i + 1], org[3 * i + 2]}, 0.0f, {dir[3 * i], dir[3 * i + 1], dir[3 * i + 2]}, INFINITY, 0.0f};
         hairobb_hit hit;
         int reference, got;
-        want.prim_id = REF_INVALID_ID;
-        reference = nearest(s, &b, org + 3 * i, dir + 3 * i, &want);
+        reference = ref_tube_intersect_scene(reference_scene, org + 3 * i, dir + 3 * i, 0.0, INFINITY, &want);
         got = hairobb_intersect1(bvh, &ray, &hit);
         if (got != reference) {
             /* a ray through the tube within 1e-3 r of its silhouette (a
@@ -284,8 +212,7 @@ static void compare_with_reference(const char *name, hair_scene *s, const hairob
     CHECK(inward > 100 && inward_bad <= inward / 1000, "%s: %zu of %zu rays into the fibre miss its far side", name, inward_bad, inward);
     CHECK(outward_self == 0, "%s: %zu reflected rays hit their own tube again", name, outward_self);
     hairobb_free(bvh);
-    free(b.lo);
-    free(b.hi);
+    ref_free(reference_scene);
     free(org);
     free(dir);
     free(error);
@@ -376,6 +303,19 @@ int main(void)
     if (scene_crossing(&s, 20000, 3) == 0) {
         compare_with_reference("crossing", &s, &round);
         scene_free(&s);
+    }
+    {
+        const char *path;
+        if ((path = check_data(test_data_straight_hair)) != NULL) {
+            CHECK(scene_load_hair(&s, path) == 0, "load %s", path);
+            compare_with_reference("straight.hair", &s, &round);
+            scene_free(&s);
+        }
+        if ((path = check_data(test_data_furball)) != NULL) {
+            CHECK(scene_load_furball(&s, path) == 0, "load %s", path);
+            compare_with_reference("furBall_A", &s, &round);
+            scene_free(&s);
+        }
     }
     if (scene_combed(&s, 20000, 1) == 0) {
         compare_with_embree("combed", &s);
