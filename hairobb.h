@@ -6984,8 +6984,8 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
 #define HAIROBB__TUBE_SAMPLES 16
 #define HAIROBB__TUBE_INSIDE_SAMPLES 8
 
-/* at u: out = w, z', z, S, q = |P2|^2 - r^2, q' / 2 = w - r r' */
-static void hairobb__tube_at(const hairobb__ray_poly *p, float u, float out[6])
+/* at u: out = w, z', z, S, q = |P2|^2 - r^2, q' / 2 = w - r r', |P'|^2 */
+static void hairobb__tube_at(const hairobb__ray_poly *p, float u, float out[7])
 {
     hairobb__v4 d1, value = hairobb__horner(p, hairobb__v4_set1(u), &d1, NULL);
     float v[4], d[4], r, q;
@@ -6999,9 +6999,10 @@ static void hairobb__tube_at(const hairobb__ray_poly *p, float u, float out[6])
     out[3] = q < 0.0f ? sqrtf(-q) : 0.0f;
     out[4] = q;
     out[5] = out[0] - r * d[3];
+    out[6] = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
 }
 
-static float hairobb__tube_g(const float at[6], float sheet) { return at[0] + sheet * at[1] * at[3]; }
+static float hairobb__tube_g(const float at[7], float sheet) { return at[0] + sheet * at[1] * at[3]; }
 
 /* A point in [lo, hi] where q (which 2) or q' (which 3) changes sign (f_lo
    at lo), to 2^-14 of the step: it only bounds the intervals g is sampled
@@ -7010,7 +7011,7 @@ static float hairobb__tube_split(const hairobb__ray_poly *p, float lo, float hi,
 {
     int iteration;
     for (iteration = 0; iteration < 10; ++iteration) {
-        float middle = 0.5f * (lo + hi), at[6], f;
+        float middle = 0.5f * (lo + hi), at[7], f;
         hairobb__tube_at(p, middle, at);
         f = at[which + 2];
         if (f == 0.0f) return middle;
@@ -7028,7 +7029,7 @@ static float hairobb__tube_root(const hairobb__ray_poly *p, float lo, float hi, 
     int iteration, side = 0;
     float u = lo;
     for (iteration = 0; iteration < 30; ++iteration) {
-        float at[6], g;
+        float at[7], g;
         u = lo + (hi - lo) * (g_lo / (g_lo - g_hi));
         if (!(u > lo && u < hi)) u = 0.5f * (lo + hi);
         if (u <= lo || u >= hi) break;
@@ -7051,20 +7052,25 @@ static float hairobb__tube_root(const hairobb__ray_poly *p, float lo, float hi, 
 }
 
 /* Records a sheet's hit at u if the ray passes within r of the centre there. */
-static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__ray_poly *p, uint32_t prim, float u, float sheet)
+static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__ray_poly *p, uint32_t prim, float u, float sheet,
+                             float min_tangent2)
 {
-    float at[6], t;
+    float at[7], t;
     hairobb__tube_at(p, u, at);
-    if (!(at[4] <= 0.0f)) return 0;
+    /* no circle where the tangent (nearly) vanishes: at a repeated end
+       point the tube shrinks to one circle, a set of no area, and a root
+       there is float noise */
+    if (!(at[4] <= 0.0f) || !(at[6] > min_tangent2)) return 0;
     t = (at[2] - sheet * at[3]) * rs->inv_dir_length;
     if (rs->skipping && sheet == rs->skip_sheet && t < rs->skip_t) return 0;
     return hairobb__accept(rs, prim, u, t, 0.0f, 0.0f, 0.0f);
 }
 
 /* Both sheets' roots in the inside interval [a, b]. */
-static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__ray_poly *p, uint32_t prim, float a, float b, int any_hit)
+static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__ray_poly *p, uint32_t prim, float a, float b,
+                                float min_tangent2, int any_hit)
 {
-    float previous[6], current[6], u_previous = a, sheet;
+    float previous[7], current[7], u_previous = a, sheet;
     int k, found = 0;
     hairobb__tube_at(p, a, previous);
     for (k = 1; k <= HAIROBB__TUBE_INSIDE_SAMPLES; ++k) {
@@ -7072,11 +7078,11 @@ static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__ray_poly 
         hairobb__tube_at(p, u, current);
         for (sheet = 1.0f; sheet >= -1.0f; sheet -= 2.0f) {
             float g0 = hairobb__tube_g(previous, sheet), g1 = hairobb__tube_g(current, sheet);
-            if (k == 1 && g0 == 0.0f) found |= hairobb__tube_hit(rs, p, prim, a, sheet);
+            if (k == 1 && g0 == 0.0f) found |= hairobb__tube_hit(rs, p, prim, a, sheet, min_tangent2);
             if (g1 == 0.0f)
-                found |= hairobb__tube_hit(rs, p, prim, u, sheet);
+                found |= hairobb__tube_hit(rs, p, prim, u, sheet, min_tangent2);
             else if (g0 != 0.0f && (g0 < 0.0f) != (g1 < 0.0f))
-                found |= hairobb__tube_hit(rs, p, prim, hairobb__tube_root(p, u_previous, u, g0, g1, sheet), sheet);
+                found |= hairobb__tube_hit(rs, p, prim, hairobb__tube_root(p, u_previous, u, g0, g1, sheet), sheet, min_tangent2);
             if (found && any_hit) return 1;
         }
         memcpy(previous, current, sizeof previous);
@@ -7101,7 +7107,8 @@ static void hairobb__tube_squares(const float a[4], float sign, float out[7])
 static int hairobb__intersect_tube(hairobb__ray_state *rs, const hairobb__ray_curve *c, uint32_t prim, int any_hit)
 {
     hairobb__ray_poly poly;
-    float previous[6], current[6], u_previous = 0.0f, start = -1.0f, bernstein[7] = {0, 0, 0, 0, 0, 0, 0}, scale = 0.0f;
+    float previous[7], current[7], u_previous = 0.0f, start = -1.0f, bernstein[7] = {0, 0, 0, 0, 0, 0, 0}, scale = 0.0f;
+    float min_tangent2 = 0.0f;
     int k, found = 0;
     /* q's Bernstein coefficients bound it: all of them clearly positive,
        the ray passes farther than r from the centre line everywhere (most
@@ -7112,6 +7119,12 @@ static int hairobb__intersect_tube(hairobb__ray_state *rs, const hairobb__ray_cu
     hairobb__tube_squares(c->r, -1.0f, bernstein);
     for (k = 0; k < 7 && bernstein[k] > scale * (64.0f * FLT_EPSILON); ++k) {}
     if (k == 7) return 0;
+    /* |P'|^2 below 2^-24 of the control polygon's largest (3 dP)^2: a tangent vanishing */
+    for (k = 0; k < 3; ++k) {
+        float dx = c->x[k + 1] - c->x[k], dy = c->y[k + 1] - c->y[k], dz = c->z[k + 1] - c->z[k];
+        min_tangent2 = hairobb__maxf(min_tangent2, 9.0f * (dx * dx + dy * dy + dz * dz));
+    }
+    min_tangent2 *= 1.0f / 16777216.0f;
     hairobb__to_power_form(c, &poly);
     hairobb__tube_at(&poly, 0.0f, previous);
     if (previous[4] < 0.0f) start = 0.0f;   /* inside at the open end */
@@ -7121,21 +7134,21 @@ static int hairobb__intersect_tube(hairobb__ray_state *rs, const hairobb__ray_cu
         if (start < 0.0f && current[4] < 0.0f) {   /* into an inside interval */
             start = hairobb__tube_split(&poly, u_previous, u, previous[4], 2);
         } else if (start >= 0.0f && !(current[4] < 0.0f)) {   /* out of it */
-            found |= hairobb__tube_inside(rs, &poly, prim, start, hairobb__tube_split(&poly, u_previous, u, previous[4], 2), any_hit);
+            found |= hairobb__tube_inside(rs, &poly, prim, start, hairobb__tube_split(&poly, u_previous, u, previous[4], 2), min_tangent2, any_hit);
             start = -1.0f;
         } else if (start < 0.0f && previous[5] < 0.0f && current[5] > 0.0f) {
             /* both outside, but q has a minimum between them: inside there? */
-            float low = hairobb__tube_split(&poly, u_previous, u, previous[5], 3), at[6];
+            float low = hairobb__tube_split(&poly, u_previous, u, previous[5], 3), at[7];
             hairobb__tube_at(&poly, low, at);
             if (at[4] < 0.0f)
                 found |= hairobb__tube_inside(rs, &poly, prim, hairobb__tube_split(&poly, u_previous, low, previous[4], 2),
-                                              hairobb__tube_split(&poly, low, u, at[4], 2), any_hit);
+                                              hairobb__tube_split(&poly, low, u, at[4], 2), min_tangent2, any_hit);
         }
         if (found && any_hit) return 1;
         memcpy(previous, current, sizeof previous);
         u_previous = u;
     }
-    if (start >= 0.0f) found |= hairobb__tube_inside(rs, &poly, prim, start, 1.0f, any_hit);   /* inside at the other open end */
+    if (start >= 0.0f) found |= hairobb__tube_inside(rs, &poly, prim, start, 1.0f, min_tangent2, any_hit);   /* inside at the other open end */
     return found;
 }
 

@@ -26,7 +26,10 @@
  * (products of Bernstein polynomials) and solved as reference.h solves its
  * quintic: de Casteljau halving isolates each root (variation diminishing),
  * bisection refines it to 2^-50 in u. Each root with z'(u) != 0 is a hit at
- * t = s(u) / |dir|; the first hit is the smallest t in [tnear, tfar]
+ * t = s(u) / |dir| (each root polished on its sheet's own, unsquared
+ * function w + sheet z' S, S = sqrt(r^2 - |P2|^2): H's squares lose the
+ * precision when the ray is nearly perpendicular to a long segment); the
+ * first hit is the smallest t in [tnear, tfar]
  * (inclusive), ties keeping the smaller u. Hits are classified by the outward
  * normal, the gradient of |X - c(u(X))|^2 - r(u(X))^2:
  *     n ~ R - r r' c' / (|c'|^2 - R.c''),   R = X - c(u),
@@ -34,9 +37,11 @@
  * v, the signed offset across the fibre in [-1, 1] a hair BSDF takes, is
  * reference.h's formula at the tube's hit point:
  *     v = dot(cross(c', X - c), d^) / (|c'_perp| r(u)).
- * Limitations, inherent to a floating-point reference: a ray tangent to the
- * tube (a double root) is found only where rounding shows a sign change; a
- * root where z' = 0 (the circle's plane contains the ray) is dropped.
+ * Where z' = 0 at a root of w (the circle's plane holds the ray: a ray
+ * perpendicular to the fibre), H has a double root there, and the hits are
+ * taken from w's roots instead, at depths z -/+ S.
+ * Limitation, inherent to a floating-point reference: a ray tangent to the
+ * tube (a double root) is found only where rounding shows a sign change.
  */
 #ifndef HAIROBB_TESTS_REF_TUBE_H
 #define HAIROBB_TESTS_REF_TUBE_H
@@ -158,6 +163,47 @@ static inline void ref_tube__cubic(const double c[4], double u, double *value, d
     *d2 = 6.0 * (s * (c[2] - 2.0 * c[1] + c[0]) + u * (c[3] - 2.0 * c[2] + c[1]));
 }
 
+/* sheet * (w + sheet z' sqrt(-q)) at u, unsquared (sheet +1: the entry, at
+   depth z - S; -1: the exit, at z + S), and that depth in *depth. */
+static inline double ref_tube__sheet(const double p[3][4], const double r[4], double u, double sheet, double *depth)
+{
+    double c[3], d1[3], d2[3], radius, dr, d2r, q, S;
+    int k;
+    for (k = 0; k < 3; ++k) ref_tube__cubic(p[k], u, &c[k], &d1[k], &d2[k]);
+    ref_tube__cubic(r, u, &radius, &dr, &d2r);
+    q = c[0] * c[0] + c[1] * c[1] - radius * radius;
+    S = q < 0.0 ? sqrt(-q) : 0.0;
+    *depth = c[2] - sheet * S;
+    return c[0] * d1[0] + c[1] * d1[1] + sheet * d1[2] * S;
+}
+
+/* A root u of H polished on its sheet's own function, which keeps the
+   precision H's squares lose when the ray is nearly perpendicular to a long
+   segment (H's terms cancel there below double's epsilon): the nearest
+   sign change around u, bisected to 1e-16. Returns the depth; u updated. */
+static inline double ref_tube__polish(const double p[3][4], const double r[4], double *u, double sheet)
+{
+    double h = 1e-9, depth, lo, hi, g_lo, g_hi;
+    for (; h < 0.05; h *= 4.0) {
+        lo = *u - h < 0.0 ? 0.0 : *u - h;
+        hi = *u + h > 1.0 ? 1.0 : *u + h;
+        g_lo = ref_tube__sheet(p, r, lo, sheet, &depth);
+        g_hi = ref_tube__sheet(p, r, hi, sheet, &depth);
+        if ((g_lo < 0.0) != (g_hi < 0.0)) {
+            int iteration;
+            for (iteration = 0; iteration < 200 && hi - lo > 1e-16; ++iteration) {
+                double middle = 0.5 * (lo + hi), g = ref_tube__sheet(p, r, middle, sheet, &depth);
+                if (middle <= lo || middle >= hi) break;
+                if ((g < 0.0) == (g_lo < 0.0)) lo = middle; else hi = middle;
+            }
+            *u = 0.5 * (lo + hi);
+            break;
+        }
+    }
+    ref_tube__sheet(p, r, *u, sheet, &depth);
+    return depth;
+}
+
 /* ctrl: the 16 floats of one segment. Writes *hit (without prim_id) only
    when returning 1. all (optional, up to REF_TUBE_MAX_ROOTS): every hit in
    [tnear, tfar], in root order, and their count in *all_count. */
@@ -196,16 +242,49 @@ static inline int ref_tube_segment_hit(const ref__ray *ray, const float *ctrl, d
     if (h[0] == 0.0) ref_tube__add(&roots, 0.0);
     ref_tube__isolate(&roots, h, 0.0, 1.0, 0);
     if (h[REF_TUBE_DEGREE] == 0.0) ref_tube__add(&roots, 1.0);
-    for (i = 0; i < roots.count; ++i) {
-        double u = roots.u[i], c[3], d1[3], d2[3], radius, dr, s, t, X[3], C[3], T[3], T2[3], R[3], n[3], rc, denominator;
-        double cross[3], tperp[3], along, len;
-        ref_tube_hit candidate;
-        for (k = 0; k < 3; ++k) ref_tube__cubic(p[k], u, &c[k], &d1[k], &d2[k]);
-        ref_tube__cubic(r, u, &radius, &dr, &len);
-        if (d1[2] == 0.0) continue;
-        s = c[2] + (c[0] * d1[0] + c[1] * d1[1]) / d1[2];
-        t = s / ray->dir_len;
-        if (!(t >= tnear && t <= tfar)) continue;
+    {
+        /* Where the circle's plane holds the ray (z' = 0 there: a ray
+           perpendicular to the fibre), H = w^2 has only double roots; the
+           ray meets the circle at depths z -/+ S at the roots of w. Each such
+           root enters twice (plane_sheet -1 and +1) after H's roots. */
+        ref_tube__roots plane;
+        int j, first_plane = roots.count;
+        plane.coef = w;
+        plane.degree = 5;
+        plane.count = 0;
+        if (w[0] == 0.0) ref_tube__add(&plane, 0.0);
+        ref_tube__isolate(&plane, w, 0.0, 1.0, 0);
+        if (w[5] == 0.0) ref_tube__add(&plane, 1.0);
+        for (j = 0; j < plane.count && roots.count + 1 < REF_TUBE_MAX_ROOTS; ++j) {
+            double c[3], d1[3], d2[3];
+            for (k = 0; k < 3; ++k) ref_tube__cubic(p[k], plane.u[j], &c[k], &d1[k], &d2[k]);
+            /* (no circle where the tangent vanishes: a repeated end point) */
+            if (fabs(d1[2]) > 1e-12 * sqrt(d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2]) ||
+                !(d1[0] * d1[0] + d1[1] * d1[1] > 0.0))
+                continue;
+            roots.u[roots.count++] = plane.u[j];
+            roots.u[roots.count++] = plane.u[j];
+        }
+        for (i = 0; i < roots.count; ++i) {
+            double u = roots.u[i], c[3], d1[3], d2[3], radius, dr, s, t, X[3], C[3], T[3], T2[3], R[3], n[3], rc, denominator;
+            double cross[3], tperp[3], along, len;
+            ref_tube_hit candidate;
+            for (k = 0; k < 3; ++k) ref_tube__cubic(p[k], u, &c[k], &d1[k], &d2[k]);
+            ref_tube__cubic(r, u, &radius, &dr, &len);
+            if (i < first_plane) {
+                if (d1[2] == 0.0) continue;
+                s = c[2] + (c[0] * d1[0] + c[1] * d1[1]) / d1[2];
+                /* the sheet s lies on, then the root polished on it */
+                s = ref_tube__polish((const double (*)[4])p, r, &u, s <= c[2] ? 1.0 : -1.0);
+                for (k = 0; k < 3; ++k) ref_tube__cubic(p[k], u, &c[k], &d1[k], &d2[k]);
+                ref_tube__cubic(r, u, &radius, &dr, &len);
+            } else {
+                double q = c[0] * c[0] + c[1] * c[1] - radius * radius;
+                if (q > 0.0) continue;
+                s = c[2] + ((i - first_plane) % 2 == 0 ? -1.0 : 1.0) * sqrt(-q);
+            }
+            t = s / ray->dir_len;
+            if (!(t >= tnear && t <= tfar)) continue;
         /* world space: the hit point, the centre, c' and c'' */
         for (k = 0; k < 3; ++k) {
             X[k] = ray->org[k] + t * ray->dir[k];
@@ -236,6 +315,7 @@ static inline int ref_tube_segment_hit(const ref__ray *ray, const float *ctrl, d
         if (!found || t < hit->t || (t == hit->t && u < hit->u)) {
             *hit = candidate;
             found = 1;
+        }
         }
     }
     return found;
