@@ -3,7 +3,10 @@
    Kajiya-Kay shading under two directional lights with ray-traced shadows
    through translucent hair (a hit filter), a PNG out.
 
-       render [file.hair] [-o out.png] [-w width] [-h height]
+       render [file.hair] [-o out.png] [-w width] [-h height] [--round]
+
+   --round traces the hair as round curves (tubes, HAIROBB_SHAPE_ROUND)
+   instead of ray-facing ribbons.
 
    Build: cc -std=c99 -O2 -I. examples/render.c -o render -lm -pthread
    (needs stb_image_write.h: Debian's libstb-dev). */
@@ -240,7 +243,7 @@ int main(int argc, char **argv)
     static const float light_color[2][3] = {{1.5f, 1.4f, 1.2f}, {0.5f, 0.6f, 0.8f}};
     float view[3] = {0.5f, -1.0f, 0.3f};   /* camera at -y (behind straight.hair's head), to the side, above */
     double t0, t_build, t_trace;
-    int a, k, t, threads = (int)sysconf(_SC_NPROCESSORS_ONLN);
+    int a, k, t, threads = (int)sysconf(_SC_NPROCESSORS_ONLN), round = 0;
 
     memset(&R, 0, sizeof R); memset(&sc, 0, sizeof sc); memset(&hair, 0, sizeof hair);
     R.w = R.h = 800;
@@ -248,8 +251,9 @@ int main(int argc, char **argv)
         if (!strcmp(argv[a], "-o") && a + 1 < argc) out = argv[++a];
         else if (!strcmp(argv[a], "-w") && a + 1 < argc) R.w = atoi(argv[++a]);
         else if (!strcmp(argv[a], "-h") && a + 1 < argc) R.h = atoi(argv[++a]);
+        else if (!strcmp(argv[a], "--round")) round = 1;
         else if (argv[a][0] != '-' && !in) in = argv[a];
-        else { fprintf(stderr, "usage: %s [file.hair] [-o out.png] [-w width] [-h height]\n", argv[0]); return 2; }
+        else { fprintf(stderr, "usage: %s [file.hair] [-o out.png] [-w width] [-h height] [--round]\n", argv[0]); return 2; }
     }
     if (R.w <= 0 || R.h <= 0 || R.w > 16384 || R.h > 16384) { fprintf(stderr, "bad image size\n"); return 2; }
 
@@ -271,6 +275,7 @@ int main(int argc, char **argv)
     t0 = now();
     memset(&options, 0, sizeof options);
     options.hit_filter = through_hair;
+    options.shape = round ? HAIROBB_SHAPE_ROUND : HAIROBB_SHAPE_RIBBON;
     res = hairobb_build(sc.vertices, sc.vertex_count, sc.indices, sc.segment_count, &options, &bvh);
     t_build = now() - t0;
     if (res != HAIROBB_OK) { fprintf(stderr, "hairobb_build: %s\n", hairobb_result_string(res)); return 1; }

@@ -843,7 +843,7 @@ static double tube_g(const float *ctrl, const double o[3], const double d[3], do
 }
 
 /* Curved, tapered segments: every hit the reference finds is a sign change
-   of g on a grid of 20,000 steps refined by bisection, and the reverse;
+   of g on a grid of 8,000 steps refined by bisection, and the reverse;
    the normals are the gradient of |X - c(u(X))|^2 - r(u(X))^2 taken by
    central differences. */
 static void test_tube_sampling(void)
@@ -851,7 +851,7 @@ static void test_tube_sampling(void)
     int segment, mismatches = 0, hits = 0, normal_bad = 0;
     double worst_normal = 0.0;
     char detail[256] = "";
-    for (segment = 0; segment < 60; ++segment) {
+    for (segment = 0; segment < 30; ++segment) {
         float ctrl[16];
         int i, k, ray_index;
         for (i = 0; i < 4; ++i) {
@@ -860,11 +860,11 @@ static void test_tube_sampling(void)
             ctrl[4 * i + 2] = (float)rnd_range(-0.5, 0.5);
             ctrl[4 * i + 3] = (float)rnd_range(0.05, 0.2);
         }
-        for (ray_index = 0; ray_index < 40; ++ray_index) {
+        for (ray_index = 0; ray_index < 30; ++ray_index) {
             float org[3], dir[3];
             double o[3], d[3], sampled[64];
             int n_sampled = 0, n_found = 0, j, step;
-            const int steps = 20000;
+            const int steps = 8000;
             double previous_g = 0.0, previous_t = 0.0;
             ref__ray ray;
             ref_tube_hit all[REF_TUBE_MAX_ROOTS], h;
@@ -953,7 +953,7 @@ static void test_tube_sampling(void)
             hits += n_found;
         }
     }
-    printf("  (tube, curved and tapered: %d hits of 60 segments x 40 rays; normals within %.2g of the gradient)\n", hits,
+    printf("  (tube, curved and tapered: %d hits of 30 segments x 30 rays; normals within %.2g of the gradient)\n", hits,
            worst_normal);
     check(mismatches == 0 && hits > 200, "tube: curved segments' hits are g's sign changes on a fine grid, and only those",
           detail);
