@@ -7243,16 +7243,18 @@ static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *r
         const float *cp = copy ? copy + 16 * i
                                : hairobb__points_at(bvh, 4 * (size_t)bvh->leaf_offsets[first + i], rs->time, scratch);
         if (HAIROBB__LEAF_VISIT(rs, prim)) continue;
-        if (rs->skip_t > 0.0f && rs->skip_sheet != 0.0f && hairobb__skipped(rs, prim, cp)) {
-            rs->skipping = 1;   /* a tube: one sheet, near the origin (hairobb__tube_hit) */
-            hit = hairobb__intersect_segment(bvh, rs, prim, cp, any_hit);
-            rs->skipping = 0;
-        } else if (rs->skip_t > 0.0f && hairobb__skipped(rs, prim, cp)) {
-            /* this segment alone is tested from skip_t on */
-            float tnear = rs->tnear;
-            rs->tnear = hairobb__maxf(tnear, rs->skip_t);
-            hit = rs->tnear <= rs->tfar && hairobb__intersect_segment(bvh, rs, prim, cp, any_hit);
-            rs->tnear = tnear;
+        if (rs->skip_t > 0.0f && hairobb__skipped(rs, prim, cp)) {
+            if (rs->skip_sheet != 0.0f) {
+                rs->skipping = 1;   /* a tube: one sheet, near the origin (hairobb__tube_hit) */
+                hit = hairobb__intersect_segment(bvh, rs, prim, cp, any_hit);
+                rs->skipping = 0;
+            } else {
+                /* a ribbon: this segment alone is tested from skip_t on */
+                float tnear = rs->tnear;
+                rs->tnear = hairobb__maxf(tnear, rs->skip_t);
+                hit = rs->tnear <= rs->tfar && hairobb__intersect_segment(bvh, rs, prim, cp, any_hit);
+                rs->tnear = tnear;
+            }
         } else {
             hit = hairobb__intersect_segment(bvh, rs, prim, cp, any_hit);
         }
