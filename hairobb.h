@@ -7235,6 +7235,9 @@ static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *r
     size_t first = (size_t)(ref >> 8), count = (size_t)((ref >> 4) & 15u), i;
     const float *copy = bvh->leaf_points ? bvh->leaf_points + 16 * first : NULL;
     int found = 0, hit;
+    /* the leaf's later segments asked for while the first is tested: one
+       line each in the copy */
+    if (copy) for (i = 1; i < count; ++i) HAIROBB__PREFETCH(copy + 16 * i);
     for (i = 0; i < count; ++i) {
         uint32_t prim = bvh->leaf_prims[first + i];
         float scratch[16];
