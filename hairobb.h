@@ -176,14 +176,22 @@
      Round curves (options.shape = HAIROBB_SHAPE_ROUND) are tubes instead:
      at each u a circle of radius r(u) about P(u) in the plane normal to
      P'(u) (Embree's cubic round curves; not a sweep of spheres, which is
-     fatter where the radius tapers). The ends are open. Both sheets count:
+     fatter where the radius tapers). The ends are open, as Embree's;
+     options.end_caps = HAIROBB_ON closes each free end with a flat cap,
+     the disk of radius r normal to P' there, whose hits report u exactly 0
+     or 1 and Ng = -P'(0) or P'(1), unit. An end is free where it is no
+     smooth joint with the neighbouring segment in index order (the same
+     point, tangents parallel within 1e-3): a strand's tips, and both sides
+     of a kink. Both sheets count:
      a ray meets the entry at t = (z(u) - S)/|dir| and the exit at (z(u) +
      S)/|dir|, S = sqrt(r^2 - |P2|^2), where the circle's plane meets the
      ray on the circle. The intersector finds the intervals of u where the
      ray passes within r of the centre line, then each sheet's roots in
      them by sign changes and bisection; a ray within about 1e-3 r of a
      tube's silhouette is decided by the float rounding of the points in
-     ray space. Round curves take the exact precision only (PIECES:
+     ray space. options.back_faces = HAIROBB_OFF keeps only hits whose
+     normal faces the ray (entries; a ray inside a fibre does not see it).
+     Round curves take the exact precision only (PIECES:
      INVALID_ARGUMENT).
 
 
@@ -193,7 +201,7 @@
      origin (round curves: the tube's outward unit normal, with the
      curvature term, n ~ R - r r' P' / (|P'|^2 - R.P''), R = X - P(u));
      tangent = P'(u) in world space; prim_id the segment index.
-     (Embree's flat curves report v in [0, 1] and the tangent as Ng.)
+     (Embree's flat curves report v in [-1, 1] too, and the tangent as Ng.)
      Every hit with t in [tnear, tfar] counts, including the ribbon a
      secondary ray starts on. Trace secondary rays with
      hairobb_intersect1_from / hairobb_occluded1_from, giving the hit they
@@ -324,6 +332,12 @@
                              (THE SURFACE), for close-ups; every basis,
                              motion, refit, save and load; the BVH and its
                              memory are the ribbon's.
+     end_caps                round curves: HAIROBB_ON closes free ends with
+                             flat caps; AUTO (default) and OFF leave them
+                             open. Ribbons ignore it.
+     back_faces              round curves: HAIROBB_OFF culls hits facing
+                             away from the ray; AUTO (default) and ON keep
+                             both sheets. Ribbons ignore it.
 
 
    8. THREADS and BUILD MEMORY
@@ -602,7 +616,7 @@ typedef enum hairobb_precision {
     HAIROBB_PRECISION_PIECES      /* linear pieces only (like Embree's flat curves) */
 } hairobb_precision;
 
-/* The surface a segment is (SHAPES). */
+/* The surface a segment is (THE SURFACE). */
 typedef enum hairobb_shape {
     HAIROBB_SHAPE_RIBBON = 0,     /* a flat ribbon facing the ray (Embree's flat curves) */
     HAIROBB_SHAPE_ROUND           /* a tube: a swept circle (Embree's round curves), both sheets */
@@ -692,7 +706,9 @@ typedef struct hairobb_build_options {
        points each, the hair at times k / (time_steps - 1); 0 or 1: static */
     unsigned time_steps;
     const float *const *time_vertices;
-    hairobb_shape shape;             /* HAIROBB_SHAPE_RIBBON (0) or _ROUND (SHAPES) */
+    hairobb_shape shape;             /* HAIROBB_SHAPE_RIBBON (0) or _ROUND (THE SURFACE) */
+    hairobb_switch end_caps;         /* round curves: ON closes each free end with a flat cap; AUTO/OFF open (THE SURFACE) */
+    hairobb_switch back_faces;       /* round curves: AUTO/ON both sheets, OFF only where rays enter (THE SURFACE) */
 } hairobb_build_options;
 
 typedef struct hairobb_bvh hairobb_bvh;
@@ -1279,6 +1295,7 @@ HAIROBB__INLINE int hairobb__highest_bit(unsigned bits)
 typedef struct hairobb__tree_settings {
     hairobb_precision precision;
     hairobb_shape shape;
+    int end_caps, cull_back_faces;    /* round curves only (0 for ribbons) */
     hairobb_node_policy policy;
     hairobb_obb_layout obb_layout;
     unsigned max_leaf_size, pieces;
@@ -1324,6 +1341,7 @@ struct hairobb_bvh {
     float lower[3], upper[3];
     hairobb_precision precision;
     hairobb_shape shape;
+    int end_caps, cull_back_faces;    /* round curves: flat caps at free ends; entries only */
     /* what hairobb_save records besides: the build's resolved options */
     hairobb_node_policy policy;
     hairobb_obb_layout obb_layout;
@@ -1445,7 +1463,8 @@ static hairobb_result hairobb__resolve_options(const hairobb_build_options *give
         !(opt->spatial_split_budget >= 0.0f && opt->spatial_split_budget <= HAIROBB__MAX_SPLIT_BUDGET) ||
         opt->max_leaf_size > HAIROBB__MAX_LEAF || opt->hair_space_candidates > HAIROBB__MAX_CANDIDATES ||
         opt->curve_pieces > HAIROBB__MAX_PIECES || (unsigned)opt->shape > HAIROBB_SHAPE_ROUND ||
-        (opt->shape == HAIROBB_SHAPE_ROUND && opt->precision == HAIROBB_PRECISION_PIECES))
+        (opt->shape == HAIROBB_SHAPE_ROUND && opt->precision == HAIROBB_PRECISION_PIECES) ||
+        (unsigned)opt->end_caps > HAIROBB_OFF || (unsigned)opt->back_faces > HAIROBB_OFF)
         return HAIROBB_ERROR_INVALID_ARGUMENT;
     if (opt->obb_layout == HAIROBB_OBB_DEFAULT) opt->obb_layout = HAIROBB__DEFAULT_OBB_LAYOUT;
     if (opt->spatial_splits == HAIROBB_AUTO) opt->spatial_splits = HAIROBB__DEFAULT_SPATIAL_SPLITS;
@@ -4509,6 +4528,8 @@ static void hairobb__set_settings(hairobb_bvh *bvh, const hairobb_build_options 
 {
     bvh->precision = tree->precision;
     bvh->shape = tree->shape;
+    bvh->end_caps = tree->end_caps;
+    bvh->cull_back_faces = tree->cull_back_faces;
     bvh->policy = tree->policy;
     bvh->obb_layout = tree->obb_layout;
     bvh->max_leaf_size = tree->max_leaf_size;
@@ -4768,6 +4789,8 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     hairobb__pad_box(bvh->lower, bvh->upper);
     tree.precision = opt.precision;
     tree.shape = opt.shape;
+    tree.end_caps = opt.shape == HAIROBB_SHAPE_ROUND && opt.end_caps == HAIROBB_ON;
+    tree.cull_back_faces = opt.shape == HAIROBB_SHAPE_ROUND && opt.back_faces == HAIROBB_OFF;
     tree.policy = opt.nodes;
     tree.obb_layout = opt.obb_layout;
     tree.max_leaf_size = opt.max_leaf_size;
@@ -5221,7 +5244,9 @@ HAIROBB_DEF hairobb_result hairobb_refit_motion(hairobb_bvh *bvh, const float *c
 #define HAIROBB__AT_LEAF_PRIMS 88
 #define HAIROBB__AT_BOUNDS 96           /* ... float lower[3], upper[3] */
 #define HAIROBB__AT_TIME_STEPS 120      /* uint32: motion blur's steps, 0 static */
-#define HAIROBB__AT_SHAPE 124           /* uint32: hairobb_shape (files before it have 0 here: ribbons) */
+#define HAIROBB__AT_SHAPE 124           /* uint32: hairobb_shape in the low byte, HAIROBB__SAVE_CAPS and _CULL above (files before it have 0 here: ribbons) */
+#define HAIROBB__SAVE_CAPS 0x100u       /* round curves: end_caps ON */
+#define HAIROBB__SAVE_CULL 0x200u       /* round curves: back_faces OFF */
 static const unsigned char hairobb__save_magic[8] = {'H', 'A', 'I', 'R', 'O', 'B', 'B', 0x1a};
 
 /* A 64-bit hash of 8-byte words: each step (xor the word, multiply by an
@@ -5369,7 +5394,8 @@ HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, si
     hairobb__put64(out + HAIROBB__AT_VERTICES, hairobb__traced_vertex_count(bvh));
     hairobb__put64(out + HAIROBB__AT_HAIR_HASH, hairobb__traced_hash(bvh));
     hairobb__put32(out + HAIROBB__AT_TIME_STEPS, bvh->time_steps);
-    hairobb__put32(out + HAIROBB__AT_SHAPE, (uint32_t)bvh->shape);
+    hairobb__put32(out + HAIROBB__AT_SHAPE, (uint32_t)bvh->shape | (bvh->end_caps ? HAIROBB__SAVE_CAPS : 0u) |
+                                            (bvh->cull_back_faces ? HAIROBB__SAVE_CULL : 0u));
     hairobb__put64(out + HAIROBB__AT_ROOT, bvh->root);
     hairobb__put64(out + HAIROBB__AT_NODE_BYTES, bvh->node_bytes);
     hairobb__put64(out + HAIROBB__AT_LEAF_PRIMS, bvh->leaf_prim_count);
@@ -5477,7 +5503,7 @@ typedef struct hairobb__saved {
    are finite. */
 static hairobb_result hairobb__read_saved(const unsigned char *in, size_t size, hairobb__saved *saved)
 {
-    uint32_t flags, precision, pieces, layout, max_leaf, policy, shape;
+    uint32_t flags, precision, pieces, layout, max_leaf, policy, shape, shape_word;
     size_t i;
     int k;
     if (size < HAIROBB__SAVE_HEADER + 8 || memcmp(in, hairobb__save_magic, sizeof hairobb__save_magic) != 0)
@@ -5506,7 +5532,9 @@ static hairobb_result hairobb__read_saved(const unsigned char *in, size_t size, 
     saved->segments = hairobb__get64(in + HAIROBB__AT_SEGMENTS);
     if (saved->basis > HAIROBB_BASIS_LINEAR || precision > HAIROBB_PRECISION_PIECES || pieces < 1 || pieces > HAIROBB__MAX_PIECES ||
         layout < HAIROBB_OBB_PER_CHILD || layout > HAIROBB_OBB_COMPRESSED_PER_CHILD || max_leaf < 1 || max_leaf > HAIROBB__MAX_LEAF ||
-        policy > HAIROBB_NODES_OBB_ONLY || (shape = hairobb__get32(in + HAIROBB__AT_SHAPE)) > HAIROBB_SHAPE_ROUND ||
+        policy > HAIROBB_NODES_OBB_ONLY ||
+        (shape_word = hairobb__get32(in + HAIROBB__AT_SHAPE)) > (HAIROBB_SHAPE_ROUND | HAIROBB__SAVE_CAPS | HAIROBB__SAVE_CULL) ||
+        (shape = shape_word & 0xffu) > HAIROBB_SHAPE_ROUND || (shape != HAIROBB_SHAPE_ROUND && shape_word != shape) ||
         (shape == HAIROBB_SHAPE_ROUND && precision == HAIROBB_PRECISION_PIECES) ||
         saved->segments == 0 || saved->leaf_prim_count == 0 || saved->node_bytes % 16 != 0)
         return HAIROBB_ERROR_INVALID_FILE;
@@ -5528,6 +5556,8 @@ static hairobb_result hairobb__read_saved(const unsigned char *in, size_t size, 
     saved->tree.max_leaf_size = max_leaf;
     saved->tree.pieces = pieces;
     saved->tree.shape = (hairobb_shape)shape;
+    saved->tree.end_caps = (shape_word & HAIROBB__SAVE_CAPS) != 0;
+    saved->tree.cull_back_faces = (shape_word & HAIROBB__SAVE_CULL) != 0;
     return HAIROBB_OK;
 }
 
@@ -5762,6 +5792,9 @@ typedef struct hairobb__ray_state {
     float skip_t;
     float skip_sheet;           /* tubes: the sheet skipped (+1 entries, -1 exits); 0 ribbons: every hit */
     int skipping;               /* tubes: set while a skipped segment is tested */
+    int cap_candidate;          /* tubes: set while an end cap's hit is offered (the filter's hit is the cap's) */
+    int hit_cap;                /* tubes: the hit taken is on an end cap */
+    int cull_back_faces;        /* tubes: back_faces OFF */
     uint32_t skip_prim;
     float skip_first[3], skip_last[3];
 } hairobb__ray_state;
@@ -5826,6 +5859,9 @@ static int hairobb__ray_setup(hairobb__ray_state *rs, const hairobb_bvh *bvh, co
     rs->skip_t = 0.0f;
     rs->skip_sheet = 0.0f;
     rs->skipping = 0;
+    rs->cap_candidate = 0;
+    rs->hit_cap = 0;
+    rs->cull_back_faces = bvh->cull_back_faces;
     rs->dir_length = sqrtf(hairobb__dot3(ray->dir, ray->dir));
     if (!(rs->dir_length > 0.0f) || !(rs->dir_length < INFINITY) || !(rs->tnear <= rs->tfar)) return 0;
     if (bvh->time_steps && !(rs->time >= 0.0f && rs->time <= 1.0f)) return 0;   /* NaN too */
@@ -6983,9 +7019,11 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
    within one step of an inside interval can still be missed. */
 #define HAIROBB__TUBE_SAMPLES 16
 #define HAIROBB__TUBE_INSIDE_SAMPLES 8
+#define HAIROBB__TUBE_AT 8   /* values hairobb__tube_at gives */
 
-/* at u: out = w, z', z, S, q = |P2|^2 - r^2, q' / 2 = w - r r', |P'|^2 */
-static void hairobb__tube_at(const hairobb__ray_poly *p, float u, float out[7])
+/* at u: out = w, z', z, S, q = |P2|^2 - r^2, q' / 2 = w - r r', |P'|^2,
+   |P2|^2 + r^2 (q's scale) */
+static void hairobb__tube_at(const hairobb__ray_poly *p, float u, float out[HAIROBB__TUBE_AT])
 {
     hairobb__v4 d1, value = hairobb__horner(p, hairobb__v4_set1(u), &d1, NULL);
     float v[4], d[4], r, q;
@@ -7000,23 +7038,28 @@ static void hairobb__tube_at(const hairobb__ray_poly *p, float u, float out[7])
     out[4] = q;
     out[5] = out[0] - r * d[3];
     out[6] = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    out[7] = q + 2.0f * r * r;
 }
 
-static float hairobb__tube_g(const float at[7], float sheet) { return at[0] + sheet * at[1] * at[3]; }
+static float hairobb__tube_g(const float at[HAIROBB__TUBE_AT], float sheet) { return at[0] + sheet * at[1] * at[3]; }
 
 /* A point in [lo, hi] where q (which 2) or q' (which 3) changes sign (f_lo
-   at lo), to 2^-14 of the step: it only bounds the intervals g is sampled
-   in, where g is continuous whatever side of it the point falls. */
+   at lo), to 2^-14 of the step. For q, the end of the last bracket where q
+   >= 0 (outside, S = 0): there both sheets' g are w, so a root of either
+   sheet just inside the interval's true end still shows as a sign change
+   of g between the last sample and this end (a point inside by rounding
+   gave g a z' S term that could hide it). */
 static float hairobb__tube_split(const hairobb__ray_poly *p, float lo, float hi, float f_lo, int which)
 {
     int iteration;
     for (iteration = 0; iteration < 10; ++iteration) {
-        float middle = 0.5f * (lo + hi), at[7], f;
+        float middle = 0.5f * (lo + hi), at[HAIROBB__TUBE_AT], f;
         hairobb__tube_at(p, middle, at);
         f = at[which + 2];
         if (f == 0.0f) return middle;
         if ((f < 0.0f) == (f_lo < 0.0f)) lo = middle; else hi = middle;
     }
+    if (which == 2) return f_lo < 0.0f ? hi : lo;
     return 0.5f * (lo + hi);
 }
 
@@ -7029,7 +7072,7 @@ static float hairobb__tube_root(const hairobb__ray_poly *p, float lo, float hi, 
     int iteration, side = 0;
     float u = lo;
     for (iteration = 0; iteration < 30; ++iteration) {
-        float at[7], g;
+        float at[HAIROBB__TUBE_AT], g;
         u = lo + (hi - lo) * (g_lo / (g_lo - g_hi));
         if (!(u > lo && u < hi)) u = 0.5f * (lo + hi);
         if (u <= lo || u >= hi) break;
@@ -7055,22 +7098,66 @@ static float hairobb__tube_root(const hairobb__ray_poly *p, float lo, float hi, 
 static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__ray_poly *p, uint32_t prim, float u, float sheet,
                              float min_tangent2)
 {
-    float at[7], t;
+    float at[HAIROBB__TUBE_AT], t;
     hairobb__tube_at(p, u, at);
     /* no circle where the tangent (nearly) vanishes: at a repeated end
        point the tube shrinks to one circle, a set of no area, and a root
        there is float noise */
-    if (!(at[4] <= 0.0f) || !(at[6] > min_tangent2)) return 0;
+    /* a root just inside an interval's end can round to q > 0: q within
+       its rounding counts as inside (S = 0 there) */
+    if (!(at[4] <= at[7] * (8.0f * FLT_EPSILON)) || !(at[6] > min_tangent2)) return 0;
     t = (at[2] - sheet * at[3]) * rs->inv_dir_length;
     if (rs->skipping && sheet == rs->skip_sheet && t < rs->skip_t) return 0;
-    return hairobb__accept(rs, prim, u, t, 0.0f, 0.0f, 0.0f);
+    if (rs->cull_back_faces) {
+        /* the normal's component along the ray (ray space: R = (-x, -y,
+           -sheet S), n = R - k c', k = r r' / (|c'|^2 - R.c''), as
+           hairobb__tube_hit_at): with taper and curvature an entry sheet's
+           root can face away from the ray, where it runs nearly along the
+           fibre */
+        hairobb__v4 d1, d2, value = hairobb__horner(p, hairobb__v4_set1(u), &d1, &d2);
+        float v[4], d[4], dd[4], denominator, k;
+        hairobb__v4_store(v, value);
+        hairobb__v4_store(d, d1);
+        hairobb__v4_store(dd, d2);
+        denominator = at[6] + v[0] * dd[0] + v[1] * dd[1] + sheet * at[3] * dd[2];
+        k = denominator != 0.0f ? hairobb__maxf(v[3], 0.0f) * d[3] / denominator : 0.0f;
+        if (-sheet * at[3] - k * d[2] > 0.0f) return 0;
+    }
+    if (!hairobb__accept(rs, prim, u, t, 0.0f, 0.0f, 0.0f)) return 0;
+    rs->hit_cap = 0;
+    return 1;
+}
+
+/* An end cap (end_caps ON): the flat disk of radius r at end 0 or 1, normal
+   to the tangent there, where that end is free (no smooth joint with the
+   next segment in index order: a tip, or a kink). The ray meets its plane
+   at depth z + w / z' (hairobb__intersect_tube's terms), at distance^2 q +
+   r^2 + (w / z')^2 from the centre. A ray going along the outward normal
+   (-P' at end 0, P' at end 1) leaves the fibre there: an exit (sheet -1). */
+static int hairobb__tube_cap(const hairobb_bvh *bvh, hairobb__ray_state *rs, const float at[HAIROBB__TUBE_AT], uint32_t prim, int end)
+{
+    float along = at[1], offset, t, sheet;
+    int taken;
+    if (!(along != 0.0f)) return 0;   /* the ray in the cap's plane */
+    offset = at[0] / along;
+    if (!(at[4] + offset * offset <= 0.0f)) return 0;
+    sheet = (along > 0.0f) == (end == 0) ? 1.0f : -1.0f;
+    if (sheet < 0.0f && rs->cull_back_faces) return 0;
+    t = (at[2] + offset) * rs->inv_dir_length;
+    if (rs->skipping && sheet == rs->skip_sheet && t < rs->skip_t) return 0;
+    if (!(t >= rs->tnear) || !(t <= rs->tfar) || hairobb__joint_at(bvh, prim, end, rs->time)) return 0;
+    rs->cap_candidate = 1;
+    taken = hairobb__accept(rs, prim, (float)end, t, 0.0f, 0.0f, 0.0f);
+    rs->cap_candidate = 0;
+    if (taken) rs->hit_cap = 1;
+    return taken;
 }
 
 /* Both sheets' roots in the inside interval [a, b]. */
 static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__ray_poly *p, uint32_t prim, float a, float b,
                                 float min_tangent2, int any_hit)
 {
-    float previous[7], current[7], u_previous = a, sheet;
+    float previous[HAIROBB__TUBE_AT], current[HAIROBB__TUBE_AT], u_previous = a, sheet;
     int k, found = 0;
     hairobb__tube_at(p, a, previous);
     for (k = 1; k <= HAIROBB__TUBE_INSIDE_SAMPLES; ++k) {
@@ -7079,10 +7166,11 @@ static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__ray_poly 
         for (sheet = 1.0f; sheet >= -1.0f; sheet -= 2.0f) {
             float g0 = hairobb__tube_g(previous, sheet), g1 = hairobb__tube_g(current, sheet);
             if (k == 1 && g0 == 0.0f) found |= hairobb__tube_hit(rs, p, prim, a, sheet, min_tangent2);
-            if (g1 == 0.0f)
+            if (g1 == 0.0f) {
                 found |= hairobb__tube_hit(rs, p, prim, u, sheet, min_tangent2);
-            else if (g0 != 0.0f && (g0 < 0.0f) != (g1 < 0.0f))
+            } else if (g0 != 0.0f && (g0 < 0.0f) != (g1 < 0.0f)) {
                 found |= hairobb__tube_hit(rs, p, prim, hairobb__tube_root(p, u_previous, u, g0, g1, sheet), sheet, min_tangent2);
+            }
             if (found && any_hit) return 1;
         }
         memcpy(previous, current, sizeof previous);
@@ -7104,10 +7192,11 @@ static void hairobb__tube_squares(const float a[4], float sign, float out[7])
     out[6] += sign * (a[3] * a[3]);
 }
 
-static int hairobb__intersect_tube(hairobb__ray_state *rs, const hairobb__ray_curve *c, uint32_t prim, int any_hit)
+static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *rs, const hairobb__ray_curve *c, uint32_t prim,
+                                   int any_hit)
 {
     hairobb__ray_poly poly;
-    float previous[7], current[7], u_previous = 0.0f, start = -1.0f, bernstein[7] = {0, 0, 0, 0, 0, 0, 0}, scale = 0.0f;
+    float previous[HAIROBB__TUBE_AT], current[HAIROBB__TUBE_AT], u_previous = 0.0f, start = -1.0f, bernstein[7] = {0, 0, 0, 0, 0, 0, 0}, scale = 0.0f;
     float min_tangent2 = 0.0f;
     int k, found = 0;
     /* q's Bernstein coefficients bound it: all of them clearly positive,
@@ -7127,6 +7216,7 @@ static int hairobb__intersect_tube(hairobb__ray_state *rs, const hairobb__ray_cu
     min_tangent2 *= 1.0f / 16777216.0f;
     hairobb__to_power_form(c, &poly);
     hairobb__tube_at(&poly, 0.0f, previous);
+    if (bvh->end_caps && previous[4] <= 0.0f && (found = hairobb__tube_cap(bvh, rs, previous, prim, 0)) && any_hit) return 1;
     if (previous[4] < 0.0f) start = 0.0f;   /* inside at the open end */
     for (k = 1; k <= HAIROBB__TUBE_SAMPLES; ++k) {
         float u = (float)k / (float)HAIROBB__TUBE_SAMPLES;
@@ -7138,7 +7228,7 @@ static int hairobb__intersect_tube(hairobb__ray_state *rs, const hairobb__ray_cu
             start = -1.0f;
         } else if (start < 0.0f && previous[5] < 0.0f && current[5] > 0.0f) {
             /* both outside, but q has a minimum between them: inside there? */
-            float low = hairobb__tube_split(&poly, u_previous, u, previous[5], 3), at[7];
+            float low = hairobb__tube_split(&poly, u_previous, u, previous[5], 3), at[HAIROBB__TUBE_AT];
             hairobb__tube_at(&poly, low, at);
             if (at[4] < 0.0f)
                 found |= hairobb__tube_inside(rs, &poly, prim, hairobb__tube_split(&poly, u_previous, low, previous[4], 2),
@@ -7149,6 +7239,8 @@ static int hairobb__intersect_tube(hairobb__ray_state *rs, const hairobb__ray_cu
         u_previous = u;
     }
     if (start >= 0.0f) found |= hairobb__tube_inside(rs, &poly, prim, start, 1.0f, min_tangent2, any_hit);   /* inside at the other open end */
+    if (found && any_hit) return 1;
+    if (bvh->end_caps && previous[4] <= 0.0f) found |= hairobb__tube_cap(bvh, rs, previous, prim, 1);   /* previous: u = 1 */
     return found;
 }
 
@@ -7211,7 +7303,7 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
     hairobb__v4_store(c.z, z);
     hairobb__v4_store(c.r, r);
     HAIROBB__COUNT(segment_passed);
-    if (bvh->shape == HAIROBB_SHAPE_ROUND ? !hairobb__intersect_tube(rs, &c, prim, any_hit)
+    if (bvh->shape == HAIROBB_SHAPE_ROUND ? !hairobb__intersect_tube(bvh, rs, &c, prim, any_hit)
                                           : !hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit))
         return 0;
     if (!any_hit) {   /* the nearest hit so far is on this segment */
@@ -7292,7 +7384,7 @@ HAIROBB__INLINE void hairobb__bezier_v4(hairobb__v4 p0, hairobb__v4 p1, hairobb_
    and the outward unit normal, the gradient of |X - c(u(X))|^2 -
    r(u(X))^2 with its curvature term: R - r r' c' / (|c'|^2 - R.c''), R = X
    - c(u). */
-static void hairobb__tube_hit_at(const hairobb__ray_state *rs, const float *cp, float u, float t, hairobb_hit *hit)
+static void hairobb__tube_hit_at(const hairobb__ray_state *rs, const float *cp, float u, float t, int cap, hairobb_hit *hit)
 {
     float s = 1.0f - u, b[4], db[4], d2b[4], C[3] = {0, 0, 0}, T[3] = {0, 0, 0}, T2[3] = {0, 0, 0}, r = 0.0f, dr = 0.0f;
     float R[3], n[3], cross[3], along, tperp2, denominator, length, scale;
@@ -7315,7 +7407,7 @@ static void hairobb__tube_hit_at(const hairobb__ray_state *rs, const float *cp, 
     memcpy(hit->tangent, T, sizeof hit->tangent);
     denominator = hairobb__dot3(T, T) - hairobb__dot3(R, T2);
     scale = denominator != 0.0f ? r * dr / denominator : 0.0f;
-    for (k = 0; k < 3; ++k) n[k] = R[k] - scale * T[k];
+    for (k = 0; k < 3; ++k) n[k] = cap ? (u > 0.5f ? T[k] : -T[k]) : R[k] - scale * T[k];   /* a cap: along the strand, out */
     length = sqrtf(hairobb__dot3(n, n));
     if (!(length > 0.0f) || !(length < INFINITY)) {   /* degenerate: against the ray */
         for (k = 0; k < 3; ++k) n[k] = -unit_dir[k];
@@ -7337,12 +7429,12 @@ static void hairobb__tube_hit_at(const hairobb__ray_state *rs, const float *cp, 
 /* Hit attributes of the hit at u, t on segment prim, c in ray space:
    computed once for the final hit, and for each one a hit filter is shown. */
 static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint32_t prim, const float *points,
-                            const hairobb__ray_curve *c, float u, float t, hairobb_hit *hit)
+                            const hairobb__ray_curve *c, float u, float t, int cap, hairobb_hit *hit)
 {
     float scratch[16];
     const float *cp = points ? points : hairobb__segment_points(bvh, prim, rs->time, scratch);
     if (bvh->shape == HAIROBB_SHAPE_ROUND) {
-        hairobb__tube_hit_at(rs, cp, u, t, hit);
+        hairobb__tube_hit_at(rs, cp, u, t, cap, hit);
         hit->t = t;
         hit->u = u;
         hit->prim_id = prim;
@@ -7397,7 +7489,7 @@ static int hairobb__hit_filtered_out(const hairobb__ray_state *rs, uint32_t prim
     hairobb__v4_store(c.y, hairobb__ray_row_v4(rs, 1, qx, qy, qz));
     hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));
     hairobb__v4_store(c.r, r);
-    hairobb__hit_at(rs->bvh, rs, prim, NULL, &c, u, t, &hit);
+    hairobb__hit_at(rs->bvh, rs, prim, NULL, &c, u, t, rs->cap_candidate, &hit);
     return !rs->hit_filter(rs->bvh->hit_filter_user, rs->ray, &hit);
 }
 
@@ -7429,7 +7521,7 @@ HAIROBB_DEF int hairobb_intersect1_from(const hairobb_bvh *bvh, const hairobb_hi
     ready = bvh && ray && hairobb__ray_setup_from(&rs, bvh, from, ray);
     hit->prim_id = HAIROBB_INVALID_ID;
     if (!ready || !hairobb__trace(bvh, &rs, 0)) return 0;
-    hairobb__hit_at(bvh, &rs, rs.hit_prim, rs.hit_points, &rs.hit_curve, rs.hit_u, rs.tfar, hit);
+    hairobb__hit_at(bvh, &rs, rs.hit_prim, rs.hit_points, &rs.hit_curve, rs.hit_u, rs.tfar, rs.hit_cap, hit);
     return 1;
 }
 
@@ -7486,6 +7578,7 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__intersect_segment hairobb__intersect_segment_avx2
 #define hairobb__intersect_tube hairobb__intersect_tube_avx2
 #define hairobb__tube_at hairobb__tube_at_avx2
+#define hairobb__tube_cap hairobb__tube_cap_avx2
 #define hairobb__tube_g hairobb__tube_g_avx2
 #define hairobb__tube_hit hairobb__tube_hit_avx2
 #define hairobb__tube_inside hairobb__tube_inside_avx2

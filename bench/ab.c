@@ -15,7 +15,8 @@
    Rays: primary (a pinhole camera), secondary (a random direction from
    each primary hit, hairobb_intersect1_from) and shadow (from each hit
    toward a point light above the hair, hairobb_occluded1_from); 1 thread.
-   Defaults only (no options): build both copies the same way. */
+   Defaults only (no options; CFLAGS_AB=-DAB_ROUND: round curves): build
+   both copies the same way. */
 #define _POSIX_C_SOURCE 200809L
 #include "ab.h"
 #include "../tests/test_data.h"

@@ -14,7 +14,7 @@ typedef struct ab_rays {
 /* a primary ray's hit, which its secondary and shadow rays leave */
 typedef struct ab_hit {
     uint32_t prim_id;
-    float t;
+    float t, Ng[3];
 } ab_hit;
 
 void *ab_base_build(const hair_scene *s);

@@ -1,7 +1,8 @@
 /* ab_copy.c - one copy of hairobb for bench/ab.c, compiled twice: once
    from the version under test and once from the base version
    (-DAB_HEADER, -DAB_NAME(x) gives each copy's names). HAIROBB_STATIC
-   keeps the two implementations apart in one program. */
+   keeps the two implementations apart in one program. -DAB_ROUND builds
+   both with round curves (CFLAGS_AB=-DAB_ROUND). */
 #define _POSIX_C_SOURCE 200809L
 #define HAIROBB_STATIC
 #define HAIROBB_IMPLEMENTATION
@@ -11,7 +12,12 @@
 void *AB_NAME(build)(const hair_scene *s)
 {
     hairobb_bvh *bvh = NULL;
-    return hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, NULL, &bvh) == HAIROBB_OK ? bvh : NULL;
+    hairobb_build_options options;
+    memset(&options, 0, sizeof options);
+#ifdef AB_ROUND
+    options.shape = HAIROBB_SHAPE_ROUND;
+#endif
+    return hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, &options, &bvh) == HAIROBB_OK ? bvh : NULL;
 }
 
 void AB_NAME(free)(void *bvh) { hairobb_free((hairobb_bvh *)bvh); }
@@ -34,10 +40,12 @@ uint64_t AB_NAME(trace)(void *bvh, const ab_rays *r, ab_hit *hits)
             if (hits) {   /* the secondary rays leave these hits: the two copies find the same ones */
                 hits[i].prim_id = hit.prim_id;
                 hits[i].t = hit.t;
+                memcpy(hits[i].Ng, hit.Ng, sizeof hits[i].Ng);
             }
         } else {
-            from.prim_id = hits[i].prim_id;   /* only prim_id is read of `from` */
+            from.prim_id = hits[i].prim_id;   /* prim_id is read of `from`, and Ng for round curves */
             from.t = hits[i].t;
+            memcpy(from.Ng, hits[i].Ng, sizeof from.Ng);
             got = r->kind == AB_SHADOW ? hairobb_occluded1_from((hairobb_bvh *)bvh, &from, &ray)
                                        : hairobb_intersect1_from((hairobb_bvh *)bvh, &from, &ray, &hit);
         }

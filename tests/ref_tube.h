@@ -321,6 +321,46 @@ static inline int ref_tube_segment_hit(const ref__ray *ray, const float *ctrl, d
     return found;
 }
 
+/* A flat end cap (end_caps): the disk of radius r(end) centred on the
+   segment's end point (end 0 or 1), in the plane normal to c' there. A hit
+   in [tnear, tfar] has u exactly end and the outward normal -c'(0) / c'(1)
+   over its length; exit and v as for the sheets. */
+static inline int ref_tube_cap_hit(const ref__ray *ray, const float *ctrl, int end, double tnear, double tfar, ref_tube_hit *hit)
+{
+    double C[3], T[3], X[3], R[3], cross[3], tperp[3], radius = (double)ctrl[12 * end + 3], along, t, d2 = 0.0, len;
+    int k;
+    if (!ray->valid) return 0;
+    for (k = 0; k < 3; ++k) {
+        C[k] = (double)ctrl[12 * end + k];
+        T[k] = end ? 3.0 * ((double)ctrl[12 + k] - (double)ctrl[8 + k]) : 3.0 * ((double)ctrl[4 + k] - (double)ctrl[k]);
+    }
+    along = ref__dot3(T, ray->dir);
+    if (along == 0.0 || !(radius > 0.0)) return 0;
+    for (k = 0; k < 3; ++k) X[k] = C[k] - ray->org[k];
+    t = ref__dot3(X, T) / along;
+    if (!(t >= tnear && t <= tfar)) return 0;
+    for (k = 0; k < 3; ++k) {
+        X[k] = ray->org[k] + t * ray->dir[k];
+        R[k] = X[k] - C[k];
+        d2 += R[k] * R[k];
+    }
+    if (!(d2 <= radius * radius)) return 0;
+    len = sqrt(ref__dot3(T, T));
+    hit->t = t;
+    hit->u = end;
+    hit->r = radius;
+    for (k = 0; k < 3; ++k) hit->normal[k] = (end ? T[k] : -T[k]) / len;
+    hit->exit = ref__dot3(hit->normal, ray->dir) > 0.0;
+    along = ref__dot3(T, ray->axis_z);
+    for (k = 0; k < 3; ++k) tperp[k] = T[k] - along * ray->axis_z[k];
+    ref__cross3(T, R, cross);
+    len = sqrt(ref__dot3(tperp, tperp));
+    hit->v = len > 0.0 ? ref__dot3(cross, ray->axis_z) / (len * radius) : 0.0;
+    hit->v = hit->v < -1.0 ? -1.0 : hit->v > 1.0 ? 1.0 : hit->v;
+    hit->prim_id = REF_INVALID_ID;
+    return 1;
+}
+
 /* The first tube hit of a ray over segments [0, segment_count), by brute
    force (the tests' scenes for tubes are small). */
 static inline int ref_tube_intersect(const float *vertices, const uint32_t *indices, size_t segment_count, const float org[3],

@@ -10,7 +10,8 @@
    some rays). The figures are printed: hit/miss disagreements (Embree's
    misses where the reference hits, its "holes", and the reverse) and
    |t - t_ref| / r. Also: a ray leaving through the tube's far sheet (the
-   reference's exit hit) and the near sheet first. ref_tube.h's own checks
+   reference's exit hit) and the near sheet first; end caps and back-face
+   culling against the reference (its caps: ref_tube_cap_hit). ref_tube.h's own checks
    (analytic cylinders and frustums, sampling, normals) are in
    test_reference.c. */
 #define _POSIX_C_SOURCE 200809L
@@ -26,6 +27,8 @@
 #include <string.h>
 
 #define SIDE 128
+
+static float dot3f(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 static int compare_doubles(const void *a, const void *b)
 {
@@ -421,6 +424,255 @@ static void test_stress(void)
 #undef STRESS_RANDOM
 }
 
+/* End caps (end_caps ON) and back-face culling (back_faces OFF) against the
+   reference: 3 strands of 4 smooth Bezier segments (shared joint points,
+   matching tangents), tapered; rays into each free end from outside, out
+   of it from inside, and oblique rays near it. The reference takes every
+   sheet hit of every segment and a cap at each strand's two free ends
+   (never at the joints); culling keeps entries only. A ray whose hit or
+   miss changes with r scaled by 1 -/+ 1e-3 is a silhouette or rim ray,
+   decided by rounding, and is counted apart. */
+#define CAP_STRANDS 3
+#define CAP_SEGMENTS 4
+
+static int cap_reference(const float *v, size_t segments, const float org[3], const float dir[3], int caps, int cull,
+                         ref_tube_hit *best)
+{
+    ref__ray ray;
+    size_t i;
+    int found = 0, j, count, end;
+    ref__ray_setup(&ray, org, dir);
+    for (i = 0; i < segments; ++i) {
+        ref_tube_hit all[REF_TUBE_MAX_ROOTS + 2], first;
+        ref_tube_segment_hit(&ray, v + 16 * i, 0.0, INFINITY, &first, all, &count);
+        for (end = 0; end < 2 && caps; ++end)
+            if ((end == 0 && i % CAP_SEGMENTS == 0) || (end == 1 && i % CAP_SEGMENTS == CAP_SEGMENTS - 1))
+                count += ref_tube_cap_hit(&ray, v + 16 * i, end, 0.0, INFINITY, &all[count]);
+        for (j = 0; j < count; ++j) {
+            if (cull && all[j].exit) continue;
+            if (found && !(all[j].t < best->t)) continue;
+            *best = all[j];
+            best->prim_id = (uint32_t)i;
+            found = 1;
+        }
+    }
+    return found;
+}
+
+static void test_caps_and_back_faces(void)
+{
+    enum { RAYS_PER_END = 2000 };
+    static float v[CAP_STRANDS * CAP_SEGMENTS * 16], scaled[2][CAP_STRANDS * CAP_SEGMENTS * 16];
+    static uint32_t idx[CAP_STRANDS * CAP_SEGMENTS];
+    size_t segments = CAP_STRANDS * CAP_SEGMENTS, i;
+    int strand, k, mode;
+    uint64_t state = 777;
+#define CAP_RANDOM() ((double)((state = state * 6364136223846793005ull + 1442695040888963407ull) >> 11) * 0x1p-53)
+    for (strand = 0; strand < CAP_STRANDS; ++strand) {
+        float joint[CAP_SEGMENTS + 1][4], handle[CAP_SEGMENTS + 1][3];
+        int j;
+        for (j = 0; j <= CAP_SEGMENTS; ++j) {
+            double a = 0.9 * j + strand;
+            joint[j][0] = (float)(0.6 * strand + 0.15 * sin(a));
+            joint[j][1] = (float)(0.5 * j);
+            joint[j][2] = (float)(0.15 * cos(1.3 * a));
+            joint[j][3] = (float)(0.06 - 0.0075 * j);
+            handle[j][0] = (float)(0.05 * cos(a));
+            handle[j][1] = 0.17f;
+            handle[j][2] = (float)(-0.06 * sin(1.3 * a));
+        }
+        for (j = 0; j < CAP_SEGMENTS; ++j) {
+            float *p = v + 16 * (size_t)(strand * CAP_SEGMENTS + j);
+            for (k = 0; k < 3; ++k) {
+                p[k] = joint[j][k];
+                p[4 + k] = joint[j][k] + handle[j][k];
+                p[8 + k] = joint[j + 1][k] - handle[j + 1][k];
+                p[12 + k] = joint[j + 1][k];
+            }
+            p[3] = joint[j][3];
+            p[7] = (2.0f * joint[j][3] + joint[j + 1][3]) / 3.0f;
+            p[11] = (joint[j][3] + 2.0f * joint[j + 1][3]) / 3.0f;
+            p[15] = joint[j + 1][3];
+        }
+    }
+    for (i = 0; i < segments; ++i) idx[i] = (uint32_t)(4 * i);
+    for (i = 0; i < 16 * segments; ++i) {
+        scaled[0][i] = v[i] * ((i & 3) == 3 ? (float)(1.0 - 1e-3) : 1.0f);
+        scaled[1][i] = v[i] * ((i & 3) == 3 ? (float)(1.0 + 1e-3) : 1.0f);
+    }
+    /* mode 0: caps; 1: caps, back faces culled; 2: open ends, back faces culled */
+    for (mode = 0; mode < 3; ++mode) {
+        hairobb_build_options o;
+        hairobb_bvh *bvh = NULL;
+        size_t rays = 0, hits = 0, cap_hits = 0, disagree = 0, edge = 0, t_bad = 0, attr_bad = 0, exits_seen = 0;
+        int caps = mode < 2, cull = mode > 0;
+        memset(&o, 0, sizeof o);
+        o.shape = HAIROBB_SHAPE_ROUND;
+        o.end_caps = caps ? HAIROBB_ON : HAIROBB_AUTO;
+        o.back_faces = cull ? HAIROBB_OFF : HAIROBB_AUTO;
+        CHECK(hairobb_build(v, 4 * segments, idx, segments, &o, &bvh) == HAIROBB_OK, "caps %d: builds", mode);
+        if (!bvh) continue;
+        for (strand = 0; strand < CAP_STRANDS; ++strand) {
+            int end;
+            for (end = 0; end < 2; ++end) {
+                const float *p = v + 16 * (size_t)(strand * CAP_SEGMENTS + (end ? CAP_SEGMENTS - 1 : 0));
+                double E[3], T[3], len = 0.0, r = p[12 * end + 3];
+                for (k = 0; k < 3; ++k) {
+                    E[k] = p[12 * end + k];
+                    T[k] = end ? p[12 + k] - p[8 + k] : p[k] - p[4 + k];   /* outward */
+                    len += T[k] * T[k];
+                }
+                len = sqrt(len);
+                for (k = 0; k < 3; ++k) T[k] /= len;
+                for (i = 0; i < RAYS_PER_END; ++i) {
+                    float org[3], dir[3];
+                    int kind = (int)(i % 3), got, want, lo, hi;
+                    ref_tube_hit expected, thin, fat;
+                    hairobb_ray ray;
+                    double dir_length;
+                    hairobb_hit hit;
+                    for (k = 0; k < 3; ++k) {
+                        double jitter = 2.0 * CAP_RANDOM() - 1.0, wobble = 2.0 * CAP_RANDOM() - 1.0;
+                        if (kind == 0) {          /* into the end from outside, nearly along the strand */
+                            org[k] = (float)(E[k] + 0.5 * T[k] + 1.3 * r * jitter);
+                            dir[k] = (float)(-T[k] + 0.25 * wobble);
+                        } else if (kind == 1) {   /* out through it from inside */
+                            org[k] = (float)(E[k] - 2.0 * r * T[k] + 0.4 * r * jitter);
+                            dir[k] = (float)(T[k] + 0.3 * wobble);
+                        } else {                  /* oblique, near the end */
+                            org[k] = (float)(E[k] + 1.5 * jitter);
+                            dir[k] = (float)(E[k] + 1.5 * r * wobble - org[k]);
+                        }
+                    }
+                    memcpy(ray.org, org, sizeof ray.org);
+                    memcpy(ray.dir, dir, sizeof ray.dir);
+                    ray.tnear = 0.0f;
+                    ray.tfar = INFINITY;
+                    ray.time = 0.0f;
+                    got = hairobb_intersect1(bvh, &ray, &hit);
+                    lo = cap_reference(scaled[0], segments, org, dir, caps, cull, &thin);
+                    hi = cap_reference(scaled[1], segments, org, dir, caps, cull, &fat);
+                    want = cap_reference(v, segments, org, dir, caps, cull, &expected);
+                    dir_length = sqrt((double)dir[0] * dir[0] + (double)dir[1] * dir[1] + (double)dir[2] * dir[2]);
+                    /* the thin and the fat hair disagree: the ray passes within 1e-3 r of an edge */
+                    if (lo && hi && fabs(thin.t - fat.t) * dir_length > 2e-3 * thin.r) hi = 0;
+                    ++rays;
+                    hits += (size_t)want;
+                    CHECK(hairobb_occluded1(bvh, &ray) == want || lo != hi, "caps %d: occluded1 agrees with the reference", mode);
+                    if (got != want) {
+                        if (lo != hi) ++edge; else ++disagree;
+                        continue;
+                    }
+                    if (!got) continue;
+                    if (fabs((double)hit.t - expected.t) * dir_length > 2e-3 * expected.r + 1e-6 * fabs(expected.t)) {
+                        if (lo != hi) ++edge; else ++t_bad;
+                        continue;
+                    }
+                    exits_seen += (size_t)expected.exit;
+                    if (expected.u == 0.0 || expected.u == 1.0) {
+                        double n_dot = 0.0;
+                        int cap_hit = hit.prim_id == expected.prim_id && hit.u == (float)expected.u;
+                        for (k = 0; k < 3; ++k) n_dot += hit.Ng[k] * expected.normal[k];
+                        cap_hits += (size_t)cap_hit;
+                        attr_bad += !cap_hit || !(n_dot > 0.999);
+                    }
+                }
+            }
+        }
+        printf("caps %d (end caps %s, back faces %s): %zu rays, %zu hit the reference (%zu on caps, %zu exits); %zu disagree, "
+               "%zu at a silhouette or rim, %zu with |dt| over 2e-3 r, %zu cap hits with another u or normal\n",
+               mode, caps ? "on" : "off", cull ? "culled" : "kept", rays, hits, cap_hits, exits_seen, disagree, edge, t_bad, attr_bad);
+        CHECK(disagree == 0 && t_bad == 0 && attr_bad == 0 && edge <= rays / 50 && hits > rays / (cull ? 8 : 3),
+              "caps %d: %zu disagree, %zu off in t, %zu bad attributes, %zu at an edge, %zu hits of %zu", mode, disagree, t_bad, attr_bad,
+              edge, hits, rays);
+        CHECK(caps ? cap_hits > rays / (cull ? 20 : 10) : cap_hits == 0, "caps %d: %zu hits on caps", mode, cap_hits);
+        CHECK(cull ? exits_seen == 0 : exits_seen > rays / 20, "caps %d: %zu exits taken", mode, exits_seen);
+        /* the options are in the saved file */
+        {
+            size_t size = hairobb_save_size(bvh), differ = 0;
+            void *buffer = malloc(size);
+            hairobb_bvh *loaded = NULL;
+            CHECK(buffer && hairobb_save(bvh, buffer, size) == HAIROBB_OK &&
+                  hairobb_load(buffer, size, v, 4 * segments, idx, segments, NULL, &loaded) == HAIROBB_OK,
+                  "caps %d: saves and loads", mode);
+            for (i = 0; loaded && i < 4000; ++i) {
+                hairobb_ray ray;
+                hairobb_hit a, b;
+                int ga, gb;
+                for (k = 0; k < 3; ++k) {
+                    double aim = (k == 0 ? 1.2 : k == 1 ? 2.0 : 0.0) * CAP_RANDOM();
+                    ray.org[k] = (float)(4.0 * CAP_RANDOM() - 2.0 + (k == 1 ? 1.0 : 0.0));
+                    ray.dir[k] = (float)(aim - ray.org[k]);
+                }
+                ray.tnear = 0.0f;
+                ray.tfar = INFINITY;
+                ray.time = 0.0f;
+                ga = hairobb_intersect1(bvh, &ray, &a);
+                gb = hairobb_intersect1(loaded, &ray, &b);
+                differ += ga != gb || (ga && memcmp(&a, &b, sizeof a) != 0);
+            }
+            CHECK(loaded && differ == 0, "caps %d: the loaded BVH gives the same hits (%zu differ)", mode, differ);
+            hairobb_free(loaded);
+            free(buffer);
+        }
+        hairobb_free(bvh);
+    }
+    /* a B-spline strand (its joints are the converted segments' shared
+       ends): a ray along the axis from inside, toward either end, meets
+       only that end's cap, never one at a joint */
+    {
+        static float bs[9 * 4];
+        static uint32_t bidx[6];
+        hairobb_build_options o;
+        hairobb_bvh *bvh = NULL;
+        size_t wrong = 0, tried = 0;
+        for (i = 0; i < 9; ++i) {
+            bs[4 * i] = (float)(0.2 * sin(0.7 * (double)i));
+            bs[4 * i + 1] = (float)(0.5 * (double)i);
+            bs[4 * i + 2] = (float)(0.1 * cos(0.5 * (double)i));
+            bs[4 * i + 3] = 0.05f;
+        }
+        for (i = 0; i < 6; ++i) bidx[i] = (uint32_t)i;
+        memset(&o, 0, sizeof o);
+        o.shape = HAIROBB_SHAPE_ROUND;
+        o.basis = HAIROBB_BASIS_BSPLINE;
+        o.end_caps = HAIROBB_ON;
+        CHECK(hairobb_build(bs, 9, bidx, 6, &o, &bvh) == HAIROBB_OK, "caps: a B-spline strand builds");
+        for (i = 0; bvh && i < 200; ++i) {
+            /* the strand's point at knot 1 + s (a joint of segments, or between), and the chord's direction */
+            double s = 0.05 + 5.9 * CAP_RANDOM(), u = s - floor(s), b[4], c[3] = {0, 0, 0}, d[3] = {0, 0, 0};
+            size_t first = (size_t)s;
+            hairobb_ray ray;
+            hairobb_hit hit;
+            int toward_tip = (int)(i & 1);
+            b[0] = (1 - u) * (1 - u) * (1 - u) / 6.0;
+            b[1] = (3 * u * u * u - 6 * u * u + 4) / 6.0;
+            b[2] = (-3 * u * u * u + 3 * u * u + 3 * u + 1) / 6.0;
+            b[3] = u * u * u / 6.0;
+            for (k = 0; k < 3; ++k) {
+                int j;
+                for (j = 0; j < 4; ++j) c[k] += b[j] * bs[4 * (first + (size_t)j) + k];
+                d[k] = bs[4 * (first + 2) + k] - bs[4 * (first + 1) + k];
+                ray.org[k] = (float)c[k];
+                ray.dir[k] = (float)(toward_tip ? d[k] : -d[k]);
+            }
+            ray.tnear = 0.0f;
+            ray.tfar = INFINITY;
+            ray.time = 0.0f;
+            ++tried;
+            /* the hit may be a sheet where the strand bends out of the ray's
+               way; a cap hit must be the strand's own end */
+            if (hairobb_intersect1(bvh, &ray, &hit) && (hit.u == 0.0f || hit.u == 1.0f) &&
+                dot3f(hit.Ng, ray.dir) > 0.0f && !(toward_tip ? hit.prim_id == 5 && hit.u == 1.0f : hit.prim_id == 0 && hit.u == 0.0f))
+                ++wrong;
+        }
+        CHECK(tried == 200 && wrong == 0, "caps: rays along a B-spline strand from inside meet no cap at a joint (%zu of %zu did)", wrong,
+              tried);
+        hairobb_free(bvh);
+    }
+#undef CAP_RANDOM
+}
+
 /* Options a round BVH must refuse or keep. */
 static void test_options(void)
 {
@@ -435,6 +687,40 @@ static void test_options(void)
     o.precision = HAIROBB_PRECISION_PIECES;
     CHECK(hairobb_build(v, 4, idx, 1, &o, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT && !bvh,
           "options: round curves with the pieces precision are refused");
+    o.precision = HAIROBB_PRECISION_EXACT;
+    o.end_caps = (hairobb_switch)3;
+    CHECK(hairobb_build(v, 4, idx, 1, &o, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT && !bvh, "options: end_caps out of range is refused");
+    o.end_caps = HAIROBB_ON;
+    o.back_faces = (hairobb_switch)7;
+    CHECK(hairobb_build(v, 4, idx, 1, &o, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT && !bvh, "options: back_faces out of range is refused");
+    /* ribbons ignore both; a ribbon file that says it has caps is a lie */
+    o.shape = HAIROBB_SHAPE_RIBBON;
+    o.back_faces = HAIROBB_OFF;
+    CHECK(hairobb_build(v, 4, idx, 1, &o, &bvh) == HAIROBB_OK && bvh, "options: ribbons build with end_caps and back_faces set");
+    if (bvh) {
+        size_t size = hairobb_save_size(bvh);
+        unsigned char *bytes = (unsigned char *)malloc(size);
+        hairobb_bvh *bad = NULL;
+        uint32_t word;
+        CHECK(bytes && hairobb_save(bvh, bytes, size) == HAIROBB_OK, "options: the ribbon BVH saves");
+        if (bytes) {
+            memcpy(&word, bytes + HAIROBB__AT_SHAPE, 4);
+            CHECK(word == HAIROBB_SHAPE_RIBBON, "options: a ribbon's file records no caps or culling (%u)", (unsigned)word);
+            word = HAIROBB_SHAPE_RIBBON | HAIROBB__SAVE_CAPS;
+            memcpy(bytes + HAIROBB__AT_SHAPE, &word, 4);
+            hairobb__put64(bytes + size - 8, hairobb__save_checksum(bytes, size));
+            CHECK(hairobb_load(bytes, size, v, 4, idx, 1, NULL, &bad) == HAIROBB_ERROR_INVALID_FILE && !bad,
+                  "options: a ribbon file with the caps bit is refused");
+            word = HAIROBB_SHAPE_ROUND | 0x400u;
+            memcpy(bytes + HAIROBB__AT_SHAPE, &word, 4);
+            hairobb__put64(bytes + size - 8, hairobb__save_checksum(bytes, size));
+            CHECK(hairobb_load(bytes, size, v, 4, idx, 1, NULL, &bad) == HAIROBB_ERROR_INVALID_FILE && !bad,
+                  "options: an unknown shape bit is refused");
+        }
+        free(bytes);
+        hairobb_free(bvh);
+        bvh = NULL;
+    }
 }
 
 int main(void)
@@ -446,6 +732,7 @@ int main(void)
     test_sheets();
     test_options();
     test_stress();
+    test_caps_and_back_faces();
     if (scene_combed(&s, 20000, 1) == 0) {
         test_save_refit(&s);
         compare_with_reference("combed", &s, &round);
