@@ -7009,8 +7009,10 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
    sheets are the roots of
        g(u) = w + sheet z' S:   sheet +1, the entry, at depth z - S;
                                 sheet -1, the exit,  at depth z + S.
-   The inside intervals are found from q at HAIROBB__TUBE_SAMPLES + 1 values
-   of u, their ends refined by bisection; a minimum of q between two
+   The inside intervals are found from q at up to HAIROBB__TUBE_SAMPLES + 1
+   values of u (spaced 1/16 apart over the part of u where the hull of q's
+   Bernstein coefficients reaches 0), their ends refined by regula falsi;
+   a minimum of q between two
    samples (q' = 2 (w - r r') changes sign there) is found too, so a ray
    that grazes the tube between samples is not lost. Each inside interval
    is sampled again at HAIROBB__TUBE_INSIDE_SAMPLES + 1 values, and each
@@ -7049,17 +7051,32 @@ static float hairobb__tube_g(const float at[HAIROBB__TUBE_AT], float sheet) { re
    sheet just inside the interval's true end still shows as a sign change
    of g between the last sample and this end (a point inside by rounding
    gave g a z' S term that could hide it). */
-static float hairobb__tube_split(const hairobb__ray_poly *p, float lo, float hi, float f_lo, int which)
+static float hairobb__tube_split(const hairobb__ray_poly *p, float lo, float hi, float f_lo, float f_hi, int which)
 {
-    int iteration;
-    for (iteration = 0; iteration < 10; ++iteration) {
-        float middle = 0.5f * (lo + hi), at[HAIROBB__TUBE_AT], f;
-        hairobb__tube_at(p, middle, at);
+    int iteration, side = 0;
+    float tolerance = (hi - lo) * (1.0f / 16384.0f), f_start = f_lo;
+    /* regula falsi with the Illinois rule: q and q' are smooth polynomials,
+       so the bracket closes in a few steps where halving took 14 */
+    for (iteration = 0; iteration < 20 && hi - lo > tolerance; ++iteration) {
+        float at[HAIROBB__TUBE_AT], f, u = lo + (hi - lo) * (f_lo / (f_lo - f_hi));
+        if (!(u > lo && u < hi)) u = 0.5f * (lo + hi);
+        if (u <= lo || u >= hi) break;
+        hairobb__tube_at(p, u, at);
         f = at[which + 2];
-        if (f == 0.0f) return middle;
-        if ((f < 0.0f) == (f_lo < 0.0f)) lo = middle; else hi = middle;
+        if (f == 0.0f) return u;
+        if ((f < 0.0f) == (f_lo < 0.0f)) {
+            lo = u;
+            f_lo = f;
+            if (side == -1) f_hi *= 0.5f;
+            side = -1;
+        } else {
+            hi = u;
+            f_hi = f;
+            if (side == 1) f_lo *= 0.5f;
+            side = 1;
+        }
     }
-    if (which == 2) return f_lo < 0.0f ? hi : lo;
+    if (which == 2) return f_start < 0.0f ? hi : lo;
     return 0.5f * (lo + hi);
 }
 
@@ -7197,8 +7214,8 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
 {
     hairobb__ray_poly poly;
     float previous[HAIROBB__TUBE_AT], current[HAIROBB__TUBE_AT], u_previous = 0.0f, start = -1.0f, bernstein[7] = {0, 0, 0, 0, 0, 0, 0}, scale = 0.0f;
-    float min_tangent2 = 0.0f;
-    int k, found = 0;
+    float min_tangent2 = 0.0f, margin, u_lo, u_hi;
+    int k, samples, found = 0;
     /* q's Bernstein coefficients bound it: all of them clearly positive,
        the ray passes farther than r from the centre line everywhere (most
        segments that pass the ribbon's cull) */
@@ -7206,8 +7223,36 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
     hairobb__tube_squares(c->y, 1.0f, bernstein);
     for (k = 0; k < 4; ++k) scale = hairobb__maxf(scale, hairobb__maxf(c->x[k] * c->x[k] + c->y[k] * c->y[k], c->r[k] * c->r[k]));
     hairobb__tube_squares(c->r, -1.0f, bernstein);
-    for (k = 0; k < 7 && bernstein[k] > scale * (64.0f * FLT_EPSILON); ++k) {}
+    margin = scale * (64.0f * FLT_EPSILON);
+    for (k = 0; k < 7 && bernstein[k] > margin; ++k) {}
     if (k == 7) return 0;
+    /* the curve (u, q(u)) lies in the hull of the points (i/6, b_i): q <= 0
+       only between the extreme u where that hull reaches down to 0 (the
+       points at or below the margin, and where a line between two points
+       on either side of it crosses it). Most segments that pass the cull
+       are near the ray over a small part of u: the samples below take
+       that part only, at the same spacing. */
+    u_lo = 1.0f;
+    u_hi = 0.0f;
+    for (k = 0; k < 7; ++k) {
+        float bk = bernstein[k] - margin;
+        int j;
+        if (bk <= 0.0f) {
+            u_lo = hairobb__minf(u_lo, (float)k * (1.0f / 6.0f));
+            u_hi = hairobb__maxf(u_hi, (float)k * (1.0f / 6.0f));
+        }
+        for (j = k + 1; j < 7; ++j) {
+            float bj = bernstein[j] - margin, cross;
+            if ((bk <= 0.0f) == (bj <= 0.0f)) continue;
+            cross = ((float)k + (float)(j - k) * (bk / (bk - bj))) * (1.0f / 6.0f);
+            u_lo = hairobb__minf(u_lo, cross);
+            u_hi = hairobb__maxf(u_hi, cross);
+        }
+    }
+    /* widened past the crossings' rounding */
+    u_lo = u_lo <= 1.0f / 1024.0f ? 0.0f : u_lo - 1.0f / 1024.0f;
+    u_hi = u_hi >= 1.0f - 1.0f / 1024.0f ? 1.0f : u_hi + 1.0f / 1024.0f;
+    samples = (int)((u_hi - u_lo) * (float)HAIROBB__TUBE_SAMPLES) + 1;
     /* |P'|^2 below 2^-24 of the control polygon's largest (3 dP)^2: a tangent vanishing */
     for (k = 0; k < 3; ++k) {
         float dx = c->x[k + 1] - c->x[k], dy = c->y[k + 1] - c->y[k], dz = c->z[k + 1] - c->z[k];
@@ -7215,32 +7260,34 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
     }
     min_tangent2 *= 1.0f / 16777216.0f;
     hairobb__to_power_form(c, &poly);
-    hairobb__tube_at(&poly, 0.0f, previous);
-    if (bvh->end_caps && previous[4] <= 0.0f && (found = hairobb__tube_cap(bvh, rs, previous, prim, 0)) && any_hit) return 1;
-    if (previous[4] < 0.0f) start = 0.0f;   /* inside at the open end */
-    for (k = 1; k <= HAIROBB__TUBE_SAMPLES; ++k) {
-        float u = (float)k / (float)HAIROBB__TUBE_SAMPLES;
+    u_previous = u_lo;
+    hairobb__tube_at(&poly, u_lo, previous);
+    if (bvh->end_caps && u_lo == 0.0f && previous[4] <= 0.0f && (found = hairobb__tube_cap(bvh, rs, previous, prim, 0)) && any_hit)
+        return 1;
+    if (previous[4] < 0.0f) start = u_lo;   /* inside at the open end (or by rounding at u_lo) */
+    for (k = 1; k <= samples; ++k) {
+        float u = k == samples ? u_hi : u_lo + (u_hi - u_lo) * ((float)k / (float)samples);
         hairobb__tube_at(&poly, u, current);
         if (start < 0.0f && current[4] < 0.0f) {   /* into an inside interval */
-            start = hairobb__tube_split(&poly, u_previous, u, previous[4], 2);
+            start = hairobb__tube_split(&poly, u_previous, u, previous[4], current[4], 2);
         } else if (start >= 0.0f && !(current[4] < 0.0f)) {   /* out of it */
-            found |= hairobb__tube_inside(rs, &poly, prim, start, hairobb__tube_split(&poly, u_previous, u, previous[4], 2), min_tangent2, any_hit);
+            found |= hairobb__tube_inside(rs, &poly, prim, start, hairobb__tube_split(&poly, u_previous, u, previous[4], current[4], 2), min_tangent2, any_hit);
             start = -1.0f;
         } else if (start < 0.0f && previous[5] < 0.0f && current[5] > 0.0f) {
             /* both outside, but q has a minimum between them: inside there? */
-            float low = hairobb__tube_split(&poly, u_previous, u, previous[5], 3), at[HAIROBB__TUBE_AT];
+            float low = hairobb__tube_split(&poly, u_previous, u, previous[5], current[5], 3), at[HAIROBB__TUBE_AT];
             hairobb__tube_at(&poly, low, at);
             if (at[4] < 0.0f)
-                found |= hairobb__tube_inside(rs, &poly, prim, hairobb__tube_split(&poly, u_previous, low, previous[4], 2),
-                                              hairobb__tube_split(&poly, low, u, at[4], 2), min_tangent2, any_hit);
+                found |= hairobb__tube_inside(rs, &poly, prim, hairobb__tube_split(&poly, u_previous, low, previous[4], at[4], 2),
+                                              hairobb__tube_split(&poly, low, u, at[4], current[4], 2), min_tangent2, any_hit);
         }
         if (found && any_hit) return 1;
         memcpy(previous, current, sizeof previous);
         u_previous = u;
     }
-    if (start >= 0.0f) found |= hairobb__tube_inside(rs, &poly, prim, start, 1.0f, min_tangent2, any_hit);   /* inside at the other open end */
+    if (start >= 0.0f) found |= hairobb__tube_inside(rs, &poly, prim, start, u_hi, min_tangent2, any_hit);   /* inside at the other open end */
     if (found && any_hit) return 1;
-    if (bvh->end_caps && previous[4] <= 0.0f) found |= hairobb__tube_cap(bvh, rs, previous, prim, 1);   /* previous: u = 1 */
+    if (bvh->end_caps && u_hi == 1.0f && previous[4] <= 0.0f) found |= hairobb__tube_cap(bvh, rs, previous, prim, 1);   /* previous: u = 1 */
     return found;
 }
 
