@@ -71,6 +71,8 @@
        hairobb_occluded1        whether anything is hit in [tnear, tfar]; stops at the first hit
        hairobb_intersect1_from  a secondary ray leaving an earlier hit (HITS)
        hairobb_occluded1_from   a shadow ray leaving an earlier hit (HITS)
+       hairobb_intersect1_context  intersect1(_from) with a per-call hit filter and its data (HITS)
+       hairobb_occluded1_context   occluded1(_from) with a per-call hit filter and its data (HITS)
      Move the hair
        hairobb_refit            the same segments at new positions (REFIT)
        hairobb_refit_tangents   the same for Hermite segments, with new tangents
@@ -218,7 +220,16 @@
      (nearest first for intersect1, none for occluded1), which may differ
      between SIMD paths and versions; the hit a call returns does not. A
      filter that is a pure function of its hit gives the same answers on
-     every path.
+     every path. Occluded calls use options.occluded_filter where it is
+     set. A filter sees each crossing of the ray once: where two pieces of
+     a segment, or two segments at a strand's joint, find the same
+     crossing, the second is not shown again once a filter has ignored the
+     first (a transmittance product stays right).
+     Per-call filters: hairobb_intersect1_context / hairobb_occluded1_context
+     take a hairobb_context, a filter and its user pointer for that call
+     (a ray's medium, depth or transmittance), called after the BVH's own
+     filter (if any) for each hit that filter takes; a hit counts where
+     both take it. from may be NULL there.
 
 
    7. BUILD OPTIONS (hairobb_build_options; a zero-initialised struct = defaults)
@@ -313,10 +324,11 @@
                              in [tnear, tfar] (nearer than the best so far
                              for intersect1, any for occluded1), on the
                              tracing thread, before it is taken: 0 ignores
-                             it. A ray within rounding of a strand's joint
-                             may show it the joint on both segments. NULL
+                             it. Each crossing is shown once (HITS). NULL
                              (default): every hit counts; an unset filter
                              costs next to nothing.
+     occluded_filter, _user  the same for occluded calls; NULL (default):
+                             they use hit_filter.
      simd                    HAIROBB_SIMD_AUTO (default): the widest path
                              the build has and the CPU runs (SIMD PATHS);
                              a path named forces it (comparisons, tests),
@@ -709,6 +721,8 @@ typedef struct hairobb_build_options {
     hairobb_shape shape;             /* HAIROBB_SHAPE_RIBBON (0) or _ROUND (THE SURFACE) */
     hairobb_switch end_caps;         /* round curves: ON closes each free end with a flat cap; AUTO/OFF open (THE SURFACE) */
     hairobb_switch back_faces;       /* round curves: AUTO/ON both sheets, OFF only where rays enter (THE SURFACE) */
+    hairobb_filter_fn occluded_filter;  /* occluded calls' filter; NULL: they use hit_filter */
+    void *occluded_filter_user;
 } hairobb_build_options;
 
 typedef struct hairobb_bvh hairobb_bvh;
@@ -826,6 +840,20 @@ HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray
 HAIROBB_DEF int hairobb_intersect1_from(const hairobb_bvh *bvh, const hairobb_hit *from, const hairobb_ray *ray,
                                         hairobb_hit *hit);
 HAIROBB_DEF int hairobb_occluded1_from(const hairobb_bvh *bvh, const hairobb_hit *from, const hairobb_ray *ray);
+
+/* A per-call hit filter (HITS): filter(user, ray, hit) for each hit the
+   BVH's own filter takes, on the calling thread; 0 ignores the hit. */
+typedef struct hairobb_context {
+    hairobb_filter_fn filter;   /* NULL: none for this call */
+    void *user;
+} hairobb_context;
+
+/* intersect1 / occluded1 with a per-call filter; context and from may be
+   NULL (then these are hairobb_intersect1_from / hairobb_occluded1_from). */
+HAIROBB_DEF int hairobb_intersect1_context(const hairobb_bvh *bvh, const hairobb_context *context, const hairobb_hit *from,
+                                           const hairobb_ray *ray, hairobb_hit *hit);
+HAIROBB_DEF int hairobb_occluded1_context(const hairobb_bvh *bvh, const hairobb_context *context, const hairobb_hit *from,
+                                          const hairobb_ray *ray);
 
 /* Cem Yuksel's .hair files (www.cemyuksel.com/research/hairmodels): the
    file's arrays, and Bezier segments made from them, ready for hairobb_build. */
@@ -1318,8 +1346,8 @@ struct hairobb_bvh {
        waiting for indices[prim] (a dependent miss at scale). NULL with the copy. */
     uint32_t *leaf_offsets;
     uint32_t *owned_indices;          /* other bases with the copy: the caller's indices, for hairobb_refit */
-    hairobb_filter_fn hit_filter;
-    void *hit_filter_user;
+    hairobb_filter_fn hit_filter, occluded_filter;
+    void *hit_filter_user, *occluded_filter_user;
     void *allocator_user;
     void *node_allocation;            /* what HAIROBB_MALLOC returned */
     unsigned char *nodes;             /* 64-byte aligned inside node_allocation */
@@ -4537,6 +4565,8 @@ static void hairobb__set_settings(hairobb_bvh *bvh, const hairobb_build_options 
     bvh->simd = simd;
     bvh->hit_filter = opt->hit_filter;
     bvh->hit_filter_user = opt->hit_filter_user;
+    bvh->occluded_filter = opt->occluded_filter ? opt->occluded_filter : opt->hit_filter;
+    bvh->occluded_filter_user = opt->occluded_filter ? opt->occluded_filter_user : opt->hit_filter_user;
     bvh->threads = opt->threads;
     bvh->parallel_for = opt->parallel_for;
     bvh->parallel_for_user = opt->parallel_for_user;
@@ -5771,9 +5801,20 @@ typedef struct hairobb__ray_curve {
 } hairobb__ray_curve;
 
 /* Everything one ray needs, computed once per ray. */
+/* A filter is shown each crossing once: candidates it ignored are kept
+   (the last HAIROBB__SHOWN, and apart the last HAIROBB__SHOWN within
+   2^-10 of a segment's end, which a joint's other segment may find after
+   many others), and one found again (the same segment at the same u, or
+   the two segments of a joint at its point) is not shown. */
+#define HAIROBB__SHOWN 8
 typedef struct hairobb__ray_state {
-    hairobb_filter_fn hit_filter;
+    int filtering;              /* a build-time or per-call filter is set */
     int any_hit;                /* occluded1 */
+    hairobb_filter_fn hit_filter, call_filter;   /* the BVH's for this kind of call; the call's */
+    void *hit_filter_user, *call_filter_user;
+    int ignored_count[2];       /* candidates the filters ignored: all, those at ends; the last HAIROBB__SHOWN of each: */
+    uint32_t ignored_prim[2][HAIROBB__SHOWN];
+    float ignored_u[2][HAIROBB__SHOWN], ignored_t[2][HAIROBB__SHOWN];
     const hairobb_bvh *bvh;     /* set with a hit filter only: what it is called with */
     const hairobb_ray *ray;     /* the caller's */
     float org[3], dir[3];
@@ -5845,8 +5886,9 @@ static int hairobb__ray_setup(hairobb__ray_state *rs, const hairobb_bvh *bvh, co
 {
     int k;
     float unit[3];
-    rs->hit_filter = bvh->hit_filter;
-    if (rs->hit_filter) { rs->bvh = bvh; rs->ray = ray; }
+    rs->filtering = 0;
+    rs->bvh = bvh;
+    rs->ray = ray;
     memcpy(rs->org, ray->org, sizeof rs->org);
     memcpy(rs->dir, ray->dir, sizeof rs->dir);
     hairobb__slab_setup(&rs->world, ray->org, ray->dir);
@@ -6714,13 +6756,13 @@ static float hairobb__ribbon_f(const hairobb__ray_poly *c, float u, float *deriv
    radius r and t is in [tnear, tfar]: the nearest hit so far. Of two
    segments hit at the same t the smaller index wins, whatever the tree. */
 /* out of line: accept stays small where no filter is set */
-HAIROBB__COLD static int hairobb__hit_filtered_out(const hairobb__ray_state *rs, uint32_t prim, float u, float t);
+HAIROBB__COLD static int hairobb__hit_filtered_out(hairobb__ray_state *rs, uint32_t prim, float u, float t);
 
 static int hairobb__accept(hairobb__ray_state *rs, uint32_t prim, float u, float t, float x, float y, float r)
 {
     if (!(x * x + y * y <= r * r) || !(t >= rs->tnear) || !(t <= rs->tfar)) return 0;
     if (t == rs->tfar && prim > rs->hit_prim) return 0;
-    if (rs->hit_filter) {
+    if (rs->filtering) {
         /* occluded1 takes one hit: the filter is shown none after it */
         if (rs->any_hit && rs->hit_prim != HAIROBB_INVALID_ID) return 0;
         if (hairobb__hit_filtered_out(rs, prim, u, t)) return 0;
@@ -7525,19 +7567,67 @@ static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs
 
 /* The segment is moved to ray space again: the intersector's copy is not
    at hand in hairobb__accept. */
-static int hairobb__hit_filtered_out(const hairobb__ray_state *rs, uint32_t prim, float u, float t)
+/* Whether the neighbour in index order begins (end 1) or ends (end 0)
+   where this segment's end point is: a joint, smooth or a kink. */
+static int hairobb__shares_end(const hairobb_bvh *bvh, uint32_t prim, int end, float time, const float *cp)
+{
+    float scratch[16];
+    const float *q;
+    if (end ? (size_t)prim + 1 >= bvh->segment_count : prim == 0) return 0;
+    q = hairobb__segment_points(bvh, end ? prim + 1 : prim - 1, time, scratch) + 12 * (1 - end);
+    cp += 12 * end;
+    return cp[0] == q[0] && cp[1] == q[1] && cp[2] == q[2];
+}
+
+/* Whether the filters ignored this crossing already (HAIROBB__SHOWN): the
+   same segment within 2^-10 of u, or at a joint the neighbour's matching
+   end, at a t within r / 64 of the segment (plus t's rounding). */
+static int hairobb__ignored_before(const hairobb__ray_state *rs, uint32_t prim, float u, float t, const float *cp)
+{
+    const float near_end = 1.0f / 1024.0f;
+    float close = hairobb__maxf(cp[3], cp[15]) * (1.0f / 64.0f) * rs->inv_dir_length + fabsf(t) * (1.0f / 65536.0f);
+    int end = u <= near_end ? 0 : u >= 1.0f - near_end ? 1 : -1, list, i;
+    for (list = 0; list < 2; ++list) {
+        int kept = rs->ignored_count[list] < HAIROBB__SHOWN ? rs->ignored_count[list] : HAIROBB__SHOWN;
+        for (i = 0; i < kept; ++i) {
+            uint32_t other = rs->ignored_prim[list][i];
+            float other_u = rs->ignored_u[list][i];
+            if (!(fabsf(rs->ignored_t[list][i] - t) <= close)) continue;
+            if (other == prim && fabsf(other_u - u) <= near_end) return 1;
+            if (end == 1 && other == prim + 1 && other_u <= near_end && hairobb__shares_end(rs->bvh, prim, 1, rs->time, cp)) return 1;
+            if (end == 0 && other + 1 == prim && other_u >= 1.0f - near_end && hairobb__shares_end(rs->bvh, prim, 0, rs->time, cp))
+                return 1;
+        }
+    }
+    return 0;
+}
+
+static int hairobb__hit_filtered_out(hairobb__ray_state *rs, uint32_t prim, float u, float t)
 {
     hairobb_hit hit;
     hairobb__ray_curve c;
     hairobb__v4 qx, qy, qz, r;
     float scratch[16];
-    hairobb__ray_points_v4(rs, hairobb__segment_points(rs->bvh, prim, rs->time, scratch), &qx, &qy, &qz, &r);
+    const float *cp = hairobb__segment_points(rs->bvh, prim, rs->time, scratch);
+    int slot, list;
+    if (hairobb__ignored_before(rs, prim, u, t, cp)) return 1;
+    hairobb__ray_points_v4(rs, cp, &qx, &qy, &qz, &r);
     hairobb__v4_store(c.x, hairobb__ray_row_v4(rs, 0, qx, qy, qz));
     hairobb__v4_store(c.y, hairobb__ray_row_v4(rs, 1, qx, qy, qz));
     hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));
     hairobb__v4_store(c.r, r);
     hairobb__hit_at(rs->bvh, rs, prim, NULL, &c, u, t, rs->cap_candidate, &hit);
-    return !rs->hit_filter(rs->bvh->hit_filter_user, rs->ray, &hit);
+    if ((!rs->hit_filter || rs->hit_filter(rs->hit_filter_user, rs->ray, &hit)) &&
+        (!rs->call_filter || rs->call_filter(rs->call_filter_user, rs->ray, &hit)))
+        return 0;
+    for (list = 0; list < 2; ++list) {
+        if (list == 1 && u > 1.0f / 1024.0f && u < 1.0f - 1.0f / 1024.0f) break;
+        slot = rs->ignored_count[list]++ % HAIROBB__SHOWN;
+        rs->ignored_prim[list][slot] = prim;
+        rs->ignored_u[list][slot] = u;
+        rs->ignored_t[list][slot] = t;
+    }
+    return 1;
 }
 
 #ifndef HAIROBB__KERNEL_PASS
@@ -7557,8 +7647,19 @@ static int hairobb__trace(const hairobb_bvh *bvh, hairobb__ray_state *rs, int an
     return hairobb__traverse(bvh, rs, any_hit);
 }
 
-HAIROBB_DEF int hairobb_intersect1_from(const hairobb_bvh *bvh, const hairobb_hit *from, const hairobb_ray *ray,
-                                        hairobb_hit *hit)
+/* The filters a call shows its hits: the BVH's for its kind, the call's. */
+HAIROBB__INLINE void hairobb__set_filters(hairobb__ray_state *rs, const hairobb_bvh *bvh, const hairobb_context *context, int any_hit)
+{
+    rs->hit_filter = any_hit ? bvh->occluded_filter : bvh->hit_filter;
+    rs->hit_filter_user = any_hit ? bvh->occluded_filter_user : bvh->hit_filter_user;
+    rs->call_filter = context ? context->filter : NULL;
+    rs->call_filter_user = context ? context->user : NULL;
+    rs->filtering = rs->hit_filter != NULL || rs->call_filter != NULL;
+    rs->ignored_count[0] = rs->ignored_count[1] = 0;
+}
+
+HAIROBB_DEF int hairobb_intersect1_context(const hairobb_bvh *bvh, const hairobb_context *context, const hairobb_hit *from,
+                                           const hairobb_ray *ray, hairobb_hit *hit)
 {
     hairobb__ray_state rs;
     int ready;
@@ -7567,16 +7668,31 @@ HAIROBB_DEF int hairobb_intersect1_from(const hairobb_bvh *bvh, const hairobb_hi
        hit, as a path tracer's loop passes them */
     ready = bvh && ray && hairobb__ray_setup_from(&rs, bvh, from, ray);
     hit->prim_id = HAIROBB_INVALID_ID;
-    if (!ready || !hairobb__trace(bvh, &rs, 0)) return 0;
+    if (!ready) return 0;
+    hairobb__set_filters(&rs, bvh, context, 0);
+    if (!hairobb__trace(bvh, &rs, 0)) return 0;
     hairobb__hit_at(bvh, &rs, rs.hit_prim, rs.hit_points, &rs.hit_curve, rs.hit_u, rs.tfar, rs.hit_cap, hit);
     return 1;
 }
 
-HAIROBB_DEF int hairobb_occluded1_from(const hairobb_bvh *bvh, const hairobb_hit *from, const hairobb_ray *ray)
+HAIROBB_DEF int hairobb_occluded1_context(const hairobb_bvh *bvh, const hairobb_context *context, const hairobb_hit *from,
+                                          const hairobb_ray *ray)
 {
     hairobb__ray_state rs;
     if (!bvh || !ray || !hairobb__ray_setup_from(&rs, bvh, from, ray)) return 0;
+    hairobb__set_filters(&rs, bvh, context, 1);
     return hairobb__trace(bvh, &rs, 1);
+}
+
+HAIROBB_DEF int hairobb_intersect1_from(const hairobb_bvh *bvh, const hairobb_hit *from, const hairobb_ray *ray,
+                                        hairobb_hit *hit)
+{
+    return hairobb_intersect1_context(bvh, NULL, from, ray, hit);
+}
+
+HAIROBB_DEF int hairobb_occluded1_from(const hairobb_bvh *bvh, const hairobb_hit *from, const hairobb_ray *ray)
+{
+    return hairobb_occluded1_context(bvh, NULL, from, ray);
 }
 
 HAIROBB_DEF int hairobb_intersect1(const hairobb_bvh *bvh, const hairobb_ray *ray, hairobb_hit *hit)
@@ -7613,6 +7729,8 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__hit_at hairobb__hit_at_avx2
 #define hairobb__tube_hit_at hairobb__tube_hit_at_avx2
 #define hairobb__hit_filtered_out hairobb__hit_filtered_out_avx2
+#define hairobb__ignored_before hairobb__ignored_before_avx2
+#define hairobb__shares_end hairobb__shares_end_avx2
 #define hairobb__horner hairobb__horner_avx2
 #define hairobb__intersect_boxes hairobb__intersect_boxes_avx2
 #define hairobb__intersect_compressed_node hairobb__intersect_compressed_node_avx2
