@@ -183,7 +183,8 @@ tree-hashes: $(B)/tree_hash $(B)/tree_hash_w4 $(B)/tree_hash_plain
 	@echo "tree hashes: $(B)/tree-hashes.txt"
 
 # The header must compile clean as users compile it: gcc and clang, C99 and
-# C++11, -Werror, static, plain C; and mingw-w64 and aarch64 gcc where make
+# C++11, -Werror with the conversion and shadow warnings a renderer's build
+# may turn on, static, plain C; and mingw-w64 and aarch64 gcc where make
 # test installed them. Each compiler is a part of its own (build/matrix-NAME,
 # written when it passed), so that make -j compiles them side by side.
 MATRIX_FLAGS = "" "-DHAIROBB_STATIC" "-DHAIROBB_NO_SIMD" "-DHAIROBB_NO_DISPATCH" "-msse4.1" "-mavx" "-mavx2" \
@@ -192,6 +193,7 @@ MATRIX_FLAGS = "" "-DHAIROBB_STATIC" "-DHAIROBB_NO_SIMD" "-DHAIROBB_NO_DISPATCH"
 # Windows (mingw-w64: Win32 threads, dispatch) and AArch64 (the NEON path)
 MATRIX_FLAGS_mingw   = "" "-DHAIROBB_NO_SIMD" "-mavx2" "-DHAIROBB_NO_THREADS"
 MATRIX_FLAGS_aarch64 = "" "-DHAIROBB_NO_SIMD" "-DHAIROBB_NODE_WIDTH=8"
+MATRIX_WARN          = -Wconversion -Wsign-conversion -Wshadow
 MATRIX_CC_mingw      = x86_64-w64-mingw32-gcc
 MATRIX_CXX_mingw     = x86_64-w64-mingw32-g++
 MATRIX_CC_aarch64    = aarch64-linux-gnu-gcc
@@ -204,20 +206,20 @@ $(B)/matrix.c: | $(B)
 $(B)/matrix-gcc $(B)/matrix-clang: $(B)/matrix-%: $(B)/matrix.c hairobb.h
 	@set -e; cc=$*; if ! command -v $$cc >/dev/null; then echo "compile-matrix: $$cc missing, left out"; exit 0; fi; \
 	  for flags in $(MATRIX_FLAGS); do \
-	    $$cc $(WARN) -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $@.o; \
-	    $$cc -x c++ -std=c++11 -Wall -Wextra -pedantic -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $@.o; \
+	    $$cc $(WARN) $(MATRIX_WARN) -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $@.o; \
+	    $$cc -x c++ -std=c++11 -Wall -Wextra -pedantic $(MATRIX_WARN) -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $@.o; \
 	    echo "compile-matrix: $$cc $$flags (C99 and C++11) clean"; done; \
 	  mkdir -p $@-renamed && cp hairobb.h $@-renamed/third_party_hair.h; \
 	  printf '#define HAIROBB_IMPLEMENTATION\n#include "third_party_hair.h"\nint main(void){return 0;}\n' > $@-renamed/matrix.c; \
-	  $$cc $(WARN) -Werror -O2 '-DHAIROBB_SELF="third_party_hair.h"' -I$@-renamed -c $@-renamed/matrix.c -o $@.o; \
+	  $$cc $(WARN) $(MATRIX_WARN) -Werror -O2 '-DHAIROBB_SELF="third_party_hair.h"' -I$@-renamed -c $@-renamed/matrix.c -o $@.o; \
 	  echo "compile-matrix: $$cc with the header renamed (HAIROBB_SELF) clean"; touch $@
 $(B)/matrix-mingw $(B)/matrix-aarch64: $(B)/matrix-%: $(B)/matrix.c hairobb.h
 	@set -e; cc=$(MATRIX_CC_$*); cxx=$(MATRIX_CXX_$*); \
 	  if ! command -v $$cc >/dev/null || ! command -v $$cxx >/dev/null; then \
 	    echo "compile-matrix: $$cc or $$cxx missing, the $* builds left out"; exit 0; fi; \
 	  for flags in $(MATRIX_FLAGS_$*); do \
-	    $$cc $(WARN) -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $@.o; \
-	    $$cxx -x c++ -std=c++11 -Wall -Wextra -pedantic -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $@.o; \
+	    $$cc $(WARN) $(MATRIX_WARN) -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $@.o; \
+	    $$cxx -x c++ -std=c++11 -Wall -Wextra -pedantic $(MATRIX_WARN) -Werror -O2 $$flags -I. -c $(B)/matrix.c -o $@.o; \
 	    echo "compile-matrix: $$cc $$flags (C99 and C++11) clean"; done; touch $@
 
 # the Windows tier (tests/run_windows.sh): the quick tier's core programs and

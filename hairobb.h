@@ -51,9 +51,11 @@
      if (hairobb_intersect1(bvh, &ray, &hit)) printf("segment %u at t=%g\n", hit.prim_id, hit.t);
      hairobb_free(bvh);
 
-     A zero-initialised hairobb_build_options means the defaults. Keep
-     vertices and indices alive and unchanged until hairobb_free (MEMORY
-     LIFETIME). A .hair file gives the same buffers (.hair FILES):
+     A zero-initialised hairobb_build_options means the defaults (in C++:
+     hairobb_build_options o = hairobb_default_options(); or = {}). Keep
+     vertices and indices alive and unchanged until hairobb_free, or as
+     MEMORY LIFETIME allows (a static BVH with its copy that is only
+     traced may free them after the build). A .hair file gives the same buffers (.hair FILES):
          hairobb_hair hair;
          hairobb_hair_load("straight.hair", NULL, &hair);
          hairobb_build(hair.vertices, hair.vertex_count, hair.indices, hair.segment_count,
@@ -64,6 +66,8 @@
    2. API MAP
    ----------
      Build and free
+       hairobb_default_options  the default build options (a zeroed struct; C and C++)
+       hairobb_check_options    the name of the first option out of range, or NULL
        hairobb_build            a BVH over the caller's segments (options may be NULL)
        hairobb_free             frees a BVH (NULL is ignored)
      Trace
@@ -101,6 +105,8 @@
      Define before including the implementation.
      HAIROBB_MALLOC(size, user), HAIROBB_FREE(ptr, user)   allocation; define
                              both or neither. user = options->allocator_user.
+                             The build calls them from its threads at once
+                             (THREADS): they must be thread-safe.
      HAIROBB_ASSERT(x)       internal checks, default assert().
      HAIROBB_STATIC          make every function static to the including file.
      HAIROBB_NO_SIMD         plain C everywhere (same answers as the SIMD paths).
@@ -125,7 +131,10 @@
                              pages in its "madvise" mode: far fewer page
                              faults while a build first writes them.
      HAIROBB_SELF            the file's name as the runtime dispatch includes
-                             it again, default "hairobb.h".
+                             it again, default "hairobb.h": the name relative
+                             to the header's own folder (a quoted #include
+                             looks there first), so define it where the
+                             file is renamed, not where it is moved.
      HAIROBB_NODE_WIDTH      children per node, 4 or 8; default 8 where the
                              compiler targets AVX or the AVX2 copy is
                              compiled in, else 4.
@@ -537,6 +546,14 @@
      left allocated, and a refit leaves the BVH as it was. Validation
      (INVALID_GEOMETRY, INDEX_OUT_OF_RANGE, TOO_LARGE) comes before any
      large allocation. The library never prints and never exits.
+     INVALID_ARGUMENT from a build or a load whose pointers and counts are
+     fine is an option out of range: hairobb_check_options(&options) names
+     the first such field. Besides each field's own range (BUILD OPTIONS)
+     it refuses: tangents given with a basis other than Hermite, or
+     missing for Hermite ("tangents"); time_steps over 65,535 or with the
+     Hermite basis ("time_steps"); a NULL time_vertices or step
+     ("time_vertices"); round curves with the pieces precision
+     ("precision").
 
 
   16. SECTIONS OF THIS FILE
@@ -726,6 +743,15 @@ typedef struct hairobb_build_options {
 } hairobb_build_options;
 
 typedef struct hairobb_bvh hairobb_bvh;
+
+/* All defaults (every field zero): hairobb_build_options o =
+   hairobb_default_options(); reads the same in C and C++ (where = {0}
+   does not compile: the first field is an enum; = {} does). */
+HAIROBB_DEF hairobb_build_options hairobb_default_options(void);
+/* NULL where every field is in range; else the name of the first field
+   that is not ("max_leaf_size", "tangents", ...), which hairobb_build
+   refuses with INVALID_ARGUMENT. */
+HAIROBB_DEF const char *hairobb_check_options(const hairobb_build_options *options);
 
 /* Builds a BVH over segment_count segments. options may be NULL (defaults).
    The BVH keeps pointers to vertices and indices (see MEMORY LIFETIME).
@@ -1143,6 +1169,7 @@ static void *hairobb__malloc_large(size_t bytes, void *user)
 #define HAIROBB__DEFAULT_SPATIAL_SPLITS HAIROBB_OFF
 #define HAIROBB__DEFAULT_CLUSTERING HAIROBB_OFF
 #define HAIROBB__MAX_THREADS 256u
+#define HAIROBB__MAX_TIME_STEPS 65535u   /* a saved BVH keeps them in 16 bits' range */
 #define HAIROBB__MAX_SPLIT_BUDGET 4.0f
 /* A range a full node could not split further becomes a leaf, not a node of
    its own, up to this many segments: a third less memory at equal or
@@ -1471,29 +1498,67 @@ static hairobb_result hairobb__choose_simd(hairobb_simd requested, hairobb_simd 
    not shape the tree (the rest are the saved BVH's). */
 enum { HAIROBB__FOR_BUILD, HAIROBB__FOR_LOAD };
 
+/* The first field of o (NULL: all zero, valid) out of range among those
+   the purpose reads, by name; NULL where all are in range. The one place
+   option values are judged: hairobb_check_options reports it, the build
+   and the load refuse it (INVALID_ARGUMENT). */
+static const char *hairobb__bad_option(const hairobb_build_options *o, int purpose)
+{
+    if (!o) return NULL;
+    if ((unsigned)o->basis > HAIROBB_BASIS_LINEAR) return "basis";
+    if ((o->basis == HAIROBB_BASIS_HERMITE) != (o->tangents != NULL)) return "tangents";   /* Hermite needs them, no other basis takes them */
+    if ((unsigned)o->simd > HAIROBB_SIMD_NEON) return "simd";
+    if (o->threads > HAIROBB__MAX_THREADS) return "threads";
+    if ((unsigned)o->bezier_copy > HAIROBB_OFF) return "bezier_copy";
+    if (o->time_steps >= 2) {
+        unsigned k;
+        if (o->basis == HAIROBB_BASIS_HERMITE) return "time_steps";   /* moving Hermite tangents are not taken */
+        if (o->time_steps > HAIROBB__MAX_TIME_STEPS) return "time_steps";
+        if (!o->time_vertices) return "time_vertices";
+        for (k = 0; k < o->time_steps; ++k)
+            if (!o->time_vertices[k]) return "time_vertices";
+    }
+    if (purpose == HAIROBB__FOR_LOAD) return (unsigned)o->verify_hair > HAIROBB_OFF ? "verify_hair" : NULL;
+    if ((unsigned)o->nodes > HAIROBB_NODES_OBB_ONLY) return "nodes";
+    if ((unsigned)o->precision > HAIROBB_PRECISION_PIECES) return "precision";
+    if ((unsigned)o->obb_layout > HAIROBB_OBB_COMPRESSED_PER_CHILD) return "obb_layout";
+    if ((unsigned)o->spatial_splits > HAIROBB_OFF) return "spatial_splits";
+    if ((unsigned)o->clustering > HAIROBB_OFF) return "clustering";
+    if (!(o->spatial_split_budget >= 0.0f && o->spatial_split_budget <= HAIROBB__MAX_SPLIT_BUDGET)) return "spatial_split_budget";
+    if (o->max_leaf_size > HAIROBB__MAX_LEAF) return "max_leaf_size";
+    if (o->hair_space_candidates > HAIROBB__MAX_CANDIDATES) return "hair_space_candidates";
+    if (o->curve_pieces > HAIROBB__MAX_PIECES) return "curve_pieces";
+    if ((unsigned)o->shape > HAIROBB_SHAPE_ROUND) return "shape";
+    if (o->shape == HAIROBB_SHAPE_ROUND && o->precision == HAIROBB_PRECISION_PIECES) return "precision";   /* tubes are exact only */
+    if ((unsigned)o->end_caps > HAIROBB_OFF) return "end_caps";
+    if ((unsigned)o->back_faces > HAIROBB_OFF) return "back_faces";
+    return NULL;
+}
+
+HAIROBB_DEF const char *hairobb_check_options(const hairobb_build_options *options)
+{
+    return hairobb__bad_option(options, HAIROBB__FOR_BUILD);
+}
+
+HAIROBB_DEF hairobb_build_options hairobb_default_options(void)
+{
+    hairobb_build_options options;
+    memset(&options, 0, sizeof options);
+    return options;
+}
+
 /* The options as given (NULL: all zero) into *opt, every zero or AUTO field
    that stands for a default set to it; INVALID_ARGUMENT for a value out of
    range among the fields the purpose reads. */
 static hairobb_result hairobb__resolve_options(const hairobb_build_options *given, int purpose, hairobb_build_options *opt)
 {
+    if (hairobb__bad_option(given, purpose)) return HAIROBB_ERROR_INVALID_ARGUMENT;
     if (given) *opt = *given; else memset(opt, 0, sizeof *opt);
-    if ((unsigned)opt->basis > HAIROBB_BASIS_LINEAR || (opt->basis == HAIROBB_BASIS_HERMITE) != (opt->tangents != NULL) ||
-        (unsigned)opt->simd > HAIROBB_SIMD_NEON || opt->threads > HAIROBB__MAX_THREADS || (unsigned)opt->bezier_copy > HAIROBB_OFF)
-        return HAIROBB_ERROR_INVALID_ARGUMENT;
-    if (purpose == HAIROBB__FOR_LOAD) return (unsigned)opt->verify_hair > HAIROBB_OFF ? HAIROBB_ERROR_INVALID_ARGUMENT : HAIROBB_OK;
+    if (purpose == HAIROBB__FOR_LOAD) return HAIROBB_OK;
     if (opt->max_leaf_size == 0) opt->max_leaf_size = HAIROBB__DEFAULT_MAX_LEAF;
     if (opt->hair_space_candidates == 0) opt->hair_space_candidates = HAIROBB__DEFAULT_CANDIDATES;
     if (opt->curve_pieces == 0) opt->curve_pieces = HAIROBB__DEFAULT_PIECES;
     if (opt->spatial_split_budget == 0.0f) opt->spatial_split_budget = HAIROBB__DEFAULT_SPLIT_BUDGET;
-    if ((unsigned)opt->nodes > HAIROBB_NODES_OBB_ONLY || (unsigned)opt->precision > HAIROBB_PRECISION_PIECES ||
-        (unsigned)opt->obb_layout > HAIROBB_OBB_COMPRESSED_PER_CHILD ||
-        (unsigned)opt->spatial_splits > HAIROBB_OFF || (unsigned)opt->clustering > HAIROBB_OFF ||
-        !(opt->spatial_split_budget >= 0.0f && opt->spatial_split_budget <= HAIROBB__MAX_SPLIT_BUDGET) ||
-        opt->max_leaf_size > HAIROBB__MAX_LEAF || opt->hair_space_candidates > HAIROBB__MAX_CANDIDATES ||
-        opt->curve_pieces > HAIROBB__MAX_PIECES || (unsigned)opt->shape > HAIROBB_SHAPE_ROUND ||
-        (opt->shape == HAIROBB_SHAPE_ROUND && opt->precision == HAIROBB_PRECISION_PIECES) ||
-        (unsigned)opt->end_caps > HAIROBB_OFF || (unsigned)opt->back_faces > HAIROBB_OFF)
-        return HAIROBB_ERROR_INVALID_ARGUMENT;
     if (opt->obb_layout == HAIROBB_OBB_DEFAULT) opt->obb_layout = HAIROBB__DEFAULT_OBB_LAYOUT;
     if (opt->spatial_splits == HAIROBB_AUTO) opt->spatial_splits = HAIROBB__DEFAULT_SPATIAL_SPLITS;
     if (opt->clustering == HAIROBB_AUTO) opt->clustering = HAIROBB__DEFAULT_CLUSTERING;
@@ -1549,7 +1614,9 @@ static hairobb_result hairobb__validate_motion(const hairobb_build_options *opt,
     unsigned k;
     *steps = 0;
     if (opt->time_steps < 2) return HAIROBB_OK;
-    if (!opt->time_vertices || opt->basis == HAIROBB_BASIS_HERMITE || opt->time_steps > 0xffffu) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    /* as hairobb__bad_option judges them; hairobb_refit_motion comes here alone */
+    if (!opt->time_vertices || opt->basis == HAIROBB_BASIS_HERMITE || opt->time_steps > HAIROBB__MAX_TIME_STEPS)
+        return HAIROBB_ERROR_INVALID_ARGUMENT;
     for (k = 0; k < opt->time_steps; ++k)
         if (!opt->time_vertices[k]) return HAIROBB_ERROR_INVALID_ARGUMENT;
     for (k = 0; k < opt->time_steps; ++k) {
@@ -3803,7 +3870,7 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
     hairobb__node_frames(node, node_type, count, frames);
     hairobb__range_centre(b, ranges, count, centre);
     hairobb__write_boxes(b, node, node_type, centre, ranges, count, (const float (*)[9])frames, NULL);
-    for (i = 0; i < HAIROBB__W; ++i) memcpy(node + child_offset + i * sizeof(uint64_t), &empty, sizeof empty);
+    for (i = 0; i < HAIROBB__W; ++i) memcpy(node + child_offset + (size_t)i * sizeof(uint64_t), &empty, sizeof empty);
     for (i = 0; i < count; ++i) {
         const hairobb__range *c = &children[i].range;
         size_t n = c->end - c->begin;
@@ -3814,7 +3881,7 @@ static uint64_t hairobb__build_node(hairobb__builder *b, const hairobb__range *r
             ref = hairobb__build_range(b, c, depth + 1, tries, hint[i]);
         if (b->error != HAIROBB_OK) return HAIROBB__REF_EMPTY;
         /* node memory may have moved: child[] at its offset in the node */
-        memcpy(b->nodes + offset + child_offset + i * sizeof(uint64_t), &ref, sizeof ref);
+        memcpy(b->nodes + offset + child_offset + (size_t)i * sizeof(uint64_t), &ref, sizeof ref);
     }
     return (uint64_t)offset | node_type;
 }
@@ -4476,7 +4543,7 @@ static void hairobb__finish_tree(const hairobb__finish *f, unsigned char *slot, 
     ref += node_delta;
     memcpy(slot, &ref, sizeof ref);
     child_offset = HAIROBB__NODE_OFFSET(ref) + hairobb__node_size(type) - HAIROBB__W * sizeof(uint64_t);
-    for (i = 0; i < HAIROBB__W; ++i) hairobb__finish_tree(f, f->nodes + child_offset + i * sizeof ref, node_delta, leaf_count);
+    for (i = 0; i < HAIROBB__W; ++i) hairobb__finish_tree(f, f->nodes + child_offset + (size_t)i * sizeof ref, node_delta, leaf_count);
 }
 
 /* Task k's part of the last pass: its subtree finished. */
@@ -5578,7 +5645,7 @@ static hairobb_result hairobb__read_saved(const unsigned char *in, size_t size, 
         if (!(lo <= hi) || !(fabsf(lo) <= FLT_MAX) || !(fabsf(hi) <= FLT_MAX)) return HAIROBB_ERROR_INVALID_FILE;
     }
     saved->steps = hairobb__get32(in + HAIROBB__AT_TIME_STEPS);
-    if (saved->steps == 1 || saved->steps > 0xffffu || (saved->steps && saved->basis == HAIROBB_BASIS_HERMITE))
+    if (saved->steps == 1 || saved->steps > HAIROBB__MAX_TIME_STEPS || (saved->steps && saved->basis == HAIROBB_BASIS_HERMITE))
         return HAIROBB_ERROR_INVALID_FILE;
     saved->tree.precision = (hairobb_precision)precision;
     saved->tree.policy = (hairobb_node_policy)policy;
@@ -5664,6 +5731,7 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
     const unsigned char *in = HAIROBB__CAST(const unsigned char *, buffer);
     hairobb_build_options opt;
     hairobb__saved saved;
+    memset(&saved, 0, sizeof saved);   /* every field is read only once the header checked it; gcc -O1 cannot tell */
     hairobb_stats stats;
     hairobb_result result;
     hairobb_simd simd;

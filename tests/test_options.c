@@ -449,6 +449,53 @@ static void test_invalid_options(const hair_scene *s)
             r = hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, &opt, &bvh);
             CHECK(r == HAIROBB_ERROR_INVALID_ARGUMENT && bvh == NULL, "%s = %u is invalid: %s", names[field], value,
                   hairobb_result_string(r));
+            CHECK(hairobb_check_options(&opt) && !strcmp(hairobb_check_options(&opt), names[field]), "%s = %u: check_options names %s",
+                  names[field], value, hairobb_check_options(&opt) ? hairobb_check_options(&opt) : "nothing");
+            if (r == HAIROBB_OK) hairobb_free(bvh);
+        }
+    }
+    /* hairobb_check_options names the field behind each refusal, and the
+       build refuses exactly what it names */
+    {
+        static const float tangents[4] = {0, 0, 0, 0};
+        static const float *const no_steps[2] = {NULL, NULL};
+        const char *expect[] = {"basis", "tangents", "tangents", "simd", "threads", "max_leaf_size", "hair_space_candidates",
+                                "curve_pieces", "shape", "precision", "end_caps", "back_faces", "time_steps", "time_steps",
+                                "time_vertices", "time_vertices", "spatial_split_budget"};
+        int which;
+        hairobb_build_options defaults = hairobb_default_options(), zero;
+        memset(&zero, 0, sizeof zero);
+        CHECK(!memcmp(&defaults, &zero, sizeof zero), "hairobb_default_options is the zeroed struct");
+        CHECK(hairobb_check_options(&defaults) == NULL && hairobb_check_options(NULL) == NULL, "the defaults are in range");
+        for (which = 0; which < (int)(sizeof expect / sizeof expect[0]); ++which) {
+            const char *named;
+            hairobb_result r;
+            opt = hairobb_default_options();
+            switch (which) {
+            case 0: opt.basis = (hairobb_basis)9; break;
+            case 1: opt.tangents = tangents; break;                          /* tangents with Bezier */
+            case 2: opt.basis = HAIROBB_BASIS_HERMITE; break;                /* Hermite without them */
+            case 3: opt.simd = (hairobb_simd)99; break;
+            case 4: opt.threads = 257; break;
+            case 5: opt.max_leaf_size = 16; break;
+            case 6: opt.hair_space_candidates = 17; break;
+            case 7: opt.curve_pieces = 17; break;
+            case 8: opt.shape = (hairobb_shape)5; break;
+            case 9: opt.shape = HAIROBB_SHAPE_ROUND; opt.precision = HAIROBB_PRECISION_PIECES; break;
+            case 10: opt.end_caps = (hairobb_switch)4; break;
+            case 11: opt.back_faces = (hairobb_switch)4; break;
+            case 12: opt.time_steps = 65536; opt.time_vertices = no_steps; break;
+            case 13: opt.time_steps = 2; opt.basis = HAIROBB_BASIS_HERMITE; opt.tangents = tangents; opt.time_vertices = no_steps; break;
+            case 14: opt.time_steps = 2; break;
+            case 15: opt.time_steps = 2; opt.time_vertices = no_steps; break;
+            default: opt.spatial_split_budget = NAN; break;
+            }
+            named = hairobb_check_options(&opt);
+            bvh = (hairobb_bvh *)&opt;
+            r = hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, &opt, &bvh);
+            CHECK(named && !strcmp(named, expect[which]) && r == HAIROBB_ERROR_INVALID_ARGUMENT && bvh == NULL,
+                  "refusal %d: check_options names %s (want %s), the build returns %s", which, named ? named : "nothing", expect[which],
+                  hairobb_result_string(r));
             if (r == HAIROBB_OK) hairobb_free(bvh);
         }
     }
