@@ -7120,16 +7120,20 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
        g(u) = w + sheet z' S:   sheet +1, the entry, at depth z - S;
                                 sheet -1, the exit,  at depth z + S.
    The inside intervals are found from q at up to HAIROBB__TUBE_SAMPLES + 1
-   values of u (spaced 1/16 apart over the part of u where the hull of q's
-   Bernstein coefficients reaches 0), their ends refined by regula falsi;
+   values of u (spaced 1/32 apart over the part of u where the hull of q's
+   Bernstein coefficients reaches 0; 1/16 missed short inside intervals of
+   very curvy segments), their ends refined by regula falsi;
    a minimum of q between two
    samples (q' = 2 (w - r r') changes sign there) is found too, so a ray
    that grazes the tube between samples is not lost. Each inside interval
    is sampled again at HAIROBB__TUBE_INSIDE_SAMPLES + 1 values, and each
    sign change of g refined by bisection, which needs no derivative (S's is
-   infinite at the interval's ends): regula falsi. Two roots of one sheet
-   within one step of an inside interval can still be missed. */
-#define HAIROBB__TUBE_SAMPLES 16
+   infinite at the interval's ends): regula falsi. A long interval (a ray
+   along a bent fibre) is sampled at 4x the outer spacing. Two roots of one
+   sheet within one step of an inside interval can still be missed. At a
+   smooth joint the shared end counts as a root within rounding
+   (hairobb__tube_joint), so strands are watertight there. */
+#define HAIROBB__TUBE_SAMPLES 32
 #define HAIROBB__TUBE_INSIDE_SAMPLES 8
 #define HAIROBB__TUBE_AT 8   /* values hairobb__tube_at gives */
 
@@ -7234,21 +7238,24 @@ static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__ray_poly *p,
        its rounding counts as inside (S = 0 there) */
     if (!(at[4] <= at[7] * (8.0f * FLT_EPSILON)) || !(at[6] > min_tangent2)) return 0;
     t = (at[2] - sheet * at[3]) * rs->inv_dir_length;
-    if (rs->skipping && sheet == rs->skip_sheet && t < rs->skip_t) return 0;
-    if (rs->cull_back_faces) {
-        /* the normal's component along the ray (ray space: R = (-x, -y,
-           -sheet S), n = R - k c', k = r r' / (|c'|^2 - R.c''), as
+    if (rs->cull_back_faces || (rs->skipping && t < rs->skip_t)) {
+        /* whether the root faces the ray (an entry, +1) or away (-1), by
+           the normal's component along it (ray space: R = (-x, -y, -sheet
+           S), n = R - k c', k = r r' / (|c'|^2 - R.c''), as
            hairobb__tube_hit_at): with taper and curvature an entry sheet's
-           root can face away from the ray, where it runs nearly along the
-           fibre */
+           root can face away from the ray where it runs nearly along the
+           fibre, so culling and a secondary ray's skip go by it, not by
+           the sheet */
         hairobb__v4 d1, d2, value = hairobb__horner(p, hairobb__v4_set1(u), &d1, &d2);
-        float v[4], d[4], dd[4], denominator, k;
+        float v[4], d[4], dd[4], denominator, k, facing;
         hairobb__v4_store(v, value);
         hairobb__v4_store(d, d1);
         hairobb__v4_store(dd, d2);
         denominator = at[6] + v[0] * dd[0] + v[1] * dd[1] + sheet * at[3] * dd[2];
         k = denominator != 0.0f ? hairobb__maxf(v[3], 0.0f) * d[3] / denominator : 0.0f;
-        if (-sheet * at[3] - k * d[2] > 0.0f) return 0;
+        facing = -sheet * at[3] - k * d[2] > 0.0f ? -1.0f : 1.0f;
+        if (facing < 0.0f && rs->cull_back_faces) return 0;
+        if (rs->skipping && t < rs->skip_t && facing == rs->skip_sheet) return 0;
     }
     if (!hairobb__accept(rs, prim, u, t, 0.0f, 0.0f, 0.0f)) return 0;
     rs->hit_cap = 0;
@@ -7280,15 +7287,40 @@ static int hairobb__tube_cap(const hairobb_bvh *bvh, hairobb__ray_state *rs, con
     return taken;
 }
 
+/* At a strand's smooth joint (hairobb__joint_at) a sheet's root within
+   rounding of the shared end can fall just outside both segments, and the
+   ray would pass between them: as the ribbon's hairobb__try_end does, the
+   end itself is a root where g there is within its rounding (w and z' S
+   off by tens of ulps of the point's depth and distance times |P'|). at:
+   hairobb__tube_at at u = end. */
+static int hairobb__tube_joint(hairobb__ray_state *rs, const hairobb__ray_poly *p, uint32_t prim, const float at[HAIROBB__TUBE_AT],
+                               int end, float min_tangent2)
+{
+    float slack = (fabsf(at[2]) + sqrtf(at[7])) * sqrtf(at[6]) * (64.0f * FLT_EPSILON), sheet;
+    int found = 0, joint = -1;
+    for (sheet = 1.0f; sheet >= -1.0f; sheet -= 2.0f) {
+        float g = hairobb__tube_g(at, sheet);
+        if (g == 0.0f || !(fabsf(g) <= slack)) continue;   /* exact zeros are hairobb__tube_inside's */
+        if (joint < 0) joint = hairobb__joint_at(rs->bvh, prim, end, rs->time);
+        if (joint) found |= hairobb__tube_hit(rs, p, prim, (float)end, sheet, min_tangent2);
+    }
+    return found;
+}
+
 /* Both sheets' roots in the inside interval [a, b]. */
 static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__ray_poly *p, uint32_t prim, float a, float b,
                                 float min_tangent2, int any_hit)
 {
     float previous[HAIROBB__TUBE_AT], current[HAIROBB__TUBE_AT], u_previous = a, sheet;
-    int k, found = 0;
+    /* a long interval (a ray along a bent fibre, which can cross one sheet
+       twice) at the outer samples' spacing at least */
+    int k, found = 0, samples = (int)((b - a) * (float)(4 * HAIROBB__TUBE_SAMPLES)) + 1;
+    if (samples < HAIROBB__TUBE_INSIDE_SAMPLES) samples = HAIROBB__TUBE_INSIDE_SAMPLES;
     hairobb__tube_at(p, a, previous);
-    for (k = 1; k <= HAIROBB__TUBE_INSIDE_SAMPLES; ++k) {
-        float u = k == HAIROBB__TUBE_INSIDE_SAMPLES ? b : a + (b - a) * ((float)k / (float)HAIROBB__TUBE_INSIDE_SAMPLES);
+    if (a == 0.0f) found |= hairobb__tube_joint(rs, p, prim, previous, 0, min_tangent2);
+    if (found && any_hit) return 1;
+    for (k = 1; k <= samples; ++k) {
+        float u = k == samples ? b : a + (b - a) * ((float)k / (float)samples);
         hairobb__tube_at(p, u, current);
         for (sheet = 1.0f; sheet >= -1.0f; sheet -= 2.0f) {
             float g0 = hairobb__tube_g(previous, sheet), g1 = hairobb__tube_g(current, sheet);
@@ -7303,6 +7335,7 @@ static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__ray_poly 
         memcpy(previous, current, sizeof previous);
         u_previous = u;
     }
+    if (b == 1.0f) found |= hairobb__tube_joint(rs, p, prim, previous, 1, min_tangent2);
     return found;
 }
 
@@ -7812,6 +7845,7 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__intersect_tube hairobb__intersect_tube_avx2
 #define hairobb__tube_at hairobb__tube_at_avx2
 #define hairobb__tube_cap hairobb__tube_cap_avx2
+#define hairobb__tube_joint hairobb__tube_joint_avx2
 #define hairobb__tube_g hairobb__tube_g_avx2
 #define hairobb__tube_hit hairobb__tube_hit_avx2
 #define hairobb__tube_inside hairobb__tube_inside_avx2
