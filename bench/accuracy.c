@@ -1,6 +1,7 @@
 /* accuracy.c - the reference's answers (tests/reference.h, in double
-   precision) on a fixed random subset of the primary rays, and a tracer's
-   errors against them: hit/miss disagreements, |t - t_ref| / r, |u - u_ref|. */
+   precision; for round curves tests/ref_tube.h's tube) on a fixed random
+   subset of the primary rays, and a tracer's errors against them: hit/miss
+   disagreements, |t - t_ref| / r, |u - u_ref|. */
 #include "bench/bench.h"
 
 typedef struct reference_context {
@@ -15,6 +16,14 @@ static void reference_block(void *context, size_t begin, size_t end)
     for (size_t i = c->first + begin; i < c->first + end; i++)
         c->set->ref_hits[i] = ref_intersect(c->scene, c->set->rays.org + 3 * i, c->set->rays.dir + 3 * i, 0.0,
                                             INFINITY, &c->set->ref[i]);
+}
+
+static void tube_reference_block(void *context, size_t begin, size_t end)
+{
+    reference_context *c = (reference_context *)context;
+    for (size_t i = c->first + begin; i < c->first + end; i++)
+        c->set->tube_hits[i] = ref_tube_intersect_scene(c->scene, c->set->rays.org + 3 * i, c->set->rays.dir + 3 * i, 0.0,
+                                                        INFINITY, &c->set->tube[i]);
 }
 
 /* The reference's answers for the set's rays [first, end). */
@@ -56,8 +65,9 @@ int accuracy_pick(const ray_set *primary, size_t wanted, accuracy_set *a)
     return 0;
 }
 
-/* accuracy_pick, and the picked rays traced with the reference only. */
-int accuracy_prepare(const hair_scene *s, const ray_set *primary, size_t wanted, unsigned thread_count,
+/* accuracy_pick, and the picked rays traced with the reference only (and
+   the tube reference where tubes is set). */
+int accuracy_prepare(const hair_scene *s, const ray_set *primary, size_t wanted, unsigned thread_count, int tubes,
                      accuracy_set *a)
 {
     if (accuracy_pick(primary, wanted, a) != 0)
@@ -77,6 +87,17 @@ int accuracy_prepare(const hair_scene *s, const ray_set *primary, size_t wanted,
     if (!reference)
         return 1;
     reference_trace(reference, a, 0, a->rays.count, thread_count);
+    if (tubes) {
+        size_t n = a->rays.count;
+        a->tube = (ref_tube_hit *)malloc((n ? n : 1) * sizeof(ref_tube_hit));
+        a->tube_hits = (int *)malloc((n ? n : 1) * sizeof(int));
+        if (!a->tube || !a->tube_hits) {
+            ref_free(reference);
+            return 1;
+        }
+        reference_context context = {reference, a, 0};
+        parallel_for(n, thread_count, tube_reference_block, &context);
+    }
     ref_free(reference);
     a->seconds = scene_now() - start;
     return 0;
@@ -87,6 +108,8 @@ void accuracy_free(accuracy_set *a)
     ray_set_free(&a->rays);
     free(a->ref);
     free(a->ref_hits);
+    free(a->tube);
+    free(a->tube_hits);
     memset(a, 0, sizeof *a);
 }
 
@@ -96,7 +119,7 @@ static double percentile(const double *sorted, size_t n, double p)
     return n ? sorted[(size_t)(p * (double)(n - 1) + 0.5)] : NAN;
 }
 
-int accuracy_measure(const tracer *t, const accuracy_set *a, accuracy_summary *out)
+int accuracy_measure(const tracer *t, const accuracy_set *a, int tube, accuracy_summary *out)
 {
     size_t n = a->rays.count;
     memset(out, 0, sizeof *out);
@@ -109,22 +132,30 @@ int accuracy_measure(const tracer *t, const accuracy_set *a, accuracy_summary *o
         free(u_errors);
         return 1;
     }
+    if (tube && !a->tube) {
+        free(hits);
+        free(t_errors);
+        free(u_errors);
+        return 1;
+    }
     trace_pass(t, &a->rays, hits, 1);
     out->rays = n;
     for (size_t i = 0; i < n; i++) {
         int hit = hits[i].prim != NO_HIT;
-        const ref_hit *ref = &a->ref[i];
-        if (hit != a->ref_hits[i]) {
+        double ref_t = tube ? a->tube[i].t : a->ref[i].t, ref_r = tube ? a->tube[i].r : a->ref[i].r;
+        double ref_u = tube ? a->tube[i].u : a->ref[i].u;
+        uint32_t ref_prim = tube ? a->tube[i].prim_id : a->ref[i].prim_id;
+        if (hit != (tube ? a->tube_hits[i] : a->ref_hits[i])) {
             out->disagreements++;
             continue;
         }
         if (!hit)
             continue;
-        if (ref->r > 0.0)
-            t_errors[out->t_compared++] = fabs((double)hits[i].t - ref->t) / ref->r;
+        if (ref_r > 0.0)
+            t_errors[out->t_compared++] = fabs((double)hits[i].t - ref_t) / ref_r;
         /* u on another segment is a different curve's parameter */
-        if (hits[i].prim == ref->prim_id)
-            u_errors[out->u_compared++] = fabs((double)hits[i].u - ref->u);
+        if (hits[i].prim == ref_prim)
+            u_errors[out->u_compared++] = fabs((double)hits[i].u - ref_u);
     }
     qsort(t_errors, out->t_compared, sizeof(double), compare_doubles);
     qsort(u_errors, out->u_compared, sizeof(double), compare_doubles);

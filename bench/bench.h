@@ -43,6 +43,7 @@ extern bench_counts bench_count;
 #include "hairobb.h"
 #include "tests/embree_wrap.h"
 #include "tests/reference.h"
+#include "tests/ref_tube.h"
 #include "tests/scenes.h"
 
 #include <errno.h>
@@ -235,6 +236,8 @@ typedef struct accuracy_set {
     ray_set rays;      /* copies of the chosen primary rays */
     ref_hit *ref;
     int *ref_hits;
+    ref_tube_hit *tube;  /* the tube reference's answers (round curves' rows), or NULL */
+    int *tube_hits;
     double seconds;    /* reference build + trace */
 } accuracy_set;
 
@@ -318,6 +321,8 @@ int variant_index(const char *key);
 int select_variants(const char *list, int selected[VARIANT_COUNT]);
 hairobb_basis variant_basis(const variant *v, const hair_scene *s);
 int variant_comparable(const variant *v, scene_basis basis);
+/* round curves (hairobb's or Embree's): measured against the tube reference */
+int variant_is_tube(const variant *v);
 int spawn_variant(const hair_scene *s);
 hairobb_bvh *build_metered(const hair_scene *s, const float *vertices, hairobb_build_options *build_options,
                            const char *what, double *seconds, size_t *transient_bytes);
@@ -365,10 +370,10 @@ void time_in_rounds(const options *o, workload *w, built_accel accel[VARIANT_COU
 /* accuracy.c */
 void reference_trace(const ref_scene *reference, accuracy_set *a, size_t first, size_t end, unsigned thread_count);
 int accuracy_pick(const ray_set *primary, size_t wanted, accuracy_set *a);
-int accuracy_prepare(const hair_scene *s, const ray_set *primary, size_t wanted, unsigned thread_count,
+int accuracy_prepare(const hair_scene *s, const ray_set *primary, size_t wanted, unsigned thread_count, int tubes,
                      accuracy_set *a);
 void accuracy_free(accuracy_set *a);
-int accuracy_measure(const tracer *t, const accuracy_set *a, accuracy_summary *out);
+int accuracy_measure(const tracer *t, const accuracy_set *a, int tube, accuracy_summary *out);
 double disagreement_percent(const accuracy_summary *a);
 
 /* report.c */

@@ -345,7 +345,7 @@ int run_motion(const options *o)
         accuracy_rays = a.rays.count;
         for (int lib = 0; lib < MOTION_LIBRARIES; lib++) {
             motion_result *r = &results[row][lib];
-            r->has_accuracy = accuracy_measure(&r->accel.tracer, &a, &r->accuracy) == 0;
+            r->has_accuracy = accuracy_measure(&r->accel.tracer, &a, 0, &r->accuracy) == 0;
         }
         accuracy_free(&a);
         progress("done");

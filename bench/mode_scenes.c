@@ -82,7 +82,10 @@ static int workload_prepare(const options *o, const int selected[VARIANT_COUNT],
     else if (o->accuracy_rays > 0) {
         progress_start("%s: reference on %zu primary rays", w->scene.name, o->accuracy_rays);
         rss_step_begin(&w->reference_rss);
-        int failed = accuracy_prepare(&w->scene, &w->rays[RAYS_PRIMARY], o->accuracy_rays, max_threads(o), &w->accuracy);
+        int tubes = 0;
+        for (int i = 0; i < VARIANT_COUNT; i++)
+            tubes |= selected[i] && variant_is_tube(&all_variants[i]);
+        int failed = accuracy_prepare(&w->scene, &w->rays[RAYS_PRIMARY], o->accuracy_rays, max_threads(o), tubes, &w->accuracy);
         rss_step_end(&w->reference_rss);
         if (failed) {
             progress("failed");
@@ -239,7 +242,7 @@ static int run_scene(const options *o, int index, const int requested[VARIANT_CO
         variant_result *r = &sr->variants[i];
         if (r->measured && w.has_accuracy) {
             progress_start("  %s: accuracy", all_variants[i].label);
-            r->has_accuracy = accuracy_measure(&accel[i].tracer, &w.accuracy, &r->accuracy) == 0;
+            r->has_accuracy = accuracy_measure(&accel[i].tracer, &w.accuracy, variant_is_tube(&all_variants[i]), &r->accuracy) == 0;
             progress("%s", r->has_accuracy ? "done" : "out of memory");
         }
         free_variant(&accel[i]);

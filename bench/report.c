@@ -300,8 +300,8 @@ void print_accuracy_table(const workload *w, const scene_result *sr, const int s
     int any_informative = 0;
     if (!w->has_accuracy)
         return;
-    printf("\naccuracy on %zu primary rays against the double-precision reference ribbon\n",
-           w->accuracy.rays.count);
+    printf("\naccuracy on %zu primary rays against the double-precision reference ribbon (round curves' rows, *: the reference "
+           "tube)\n", w->accuracy.rays.count);
     printf("%-20s %-17s %-10s %-10s %-10s %-10s %-10s\n", "variant", "disagree", "|dt|/r med", "|dt|/r p99",
            "|dt|/r max", "|du| med", "|du| p99");
     for (int i = 0; i < VARIANT_COUNT; i++) {
@@ -317,7 +317,7 @@ void print_accuracy_table(const workload *w, const scene_result *sr, const int s
             any_informative |= all_variants[i].lib == LIB_EMBREE ? 1 : 2;
     }
     if (any_informative & 1)
-        printf("* round curves are a swept circle (a tube), not the reference's flat ribbon: informative, not comparable\n");
+        printf("* on this scene the round rows read its points as Bezier points of other curves: informative, not comparable\n");
     if (any_informative & 2)
         printf("* the C-R rows read this scene's Bezier points as Catmull-Rom points: other curves, not comparable\n");
 }

@@ -155,8 +155,14 @@ static int variant_embree_type(const variant *v, const hair_scene *s)
    the reference reads the segments' Bezier form, the curves hairobb's
    Catmull-Rom and default rows trace; the B-spline rows, and on a Bezier
    scene every basis row, read other curves through the same points. */
+int variant_is_tube(const variant *v)
+{
+    return v->lib == LIB_HAIROBB ? v->shape == HAIROBB_SHAPE_ROUND : v->embree_type == EMB_ROUND_BEZIER;
+}
+
 int variant_comparable(const variant *v, scene_basis basis)
 {
+    if (variant_is_tube(v)) return basis == SCENE_BASIS_BEZIER;   /* against the tube reference */
     if (basis == SCENE_BASIS_CATMULL_ROM && v->lib == LIB_HAIROBB)   /* its own basis or the Bezier default (made C-R) */
         return v->basis == HAIROBB_BASIS_BEZIER || v->basis == HAIROBB_BASIS_CATMULL_ROM;
     return v->accuracy_comparable;
