@@ -14,9 +14,9 @@ calls=$(objdump -dr --no-show-raw-insn "$obj" | awk '
     pending { print f, target; pending = 0 }
     /call/ { target = $NF; if (target ~ /\+0x[0-9a-f]+>$/) pending = 1; else print f, target }')
 call_count=$(printf '%s\n' "$calls" | awk 'NF' | wc -l)
-bad=$(printf '%s\n' "$calls" | awk '$2 ~ /^<hairobb__/ && $2 !~ /_avx2>$/' | sort -u)
+bad=$(printf '%s\n' "$calls" | awk '$2 ~ /^<hairobb__/ && $2 !~ /_avx2(\.[a-z]+\.[0-9]+)*>$/' | sort -u)
 avx2=$(objdump -d "$obj" | grep -c '_avx2>:$')
-if ! objdump -d "$obj" | grep -q '<hairobb__traverse_avx2>:$'; then
+if ! objdump -d "$obj" | grep -Eq '<hairobb__traverse_avx2(\.[a-z]+\.[0-9]+)*>:$'; then
     echo "FAIL: $obj has no hairobb__traverse_avx2 (is it the dispatch build?)"; echo "0 passed, 1 failed"; exit 1
 fi
 if [ -n "$bad" ]; then

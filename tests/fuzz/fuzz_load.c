@@ -112,8 +112,9 @@ static hairobb_result fuzz_load(const uint8_t *data, size_t size, hairobb_bvh **
     options.verify_hair = HAIROBB_OFF;
     options.basis = basis <= HAIROBB_BASIS_LINEAR ? (hairobb_basis)basis : HAIROBB_BASIS_BEZIER;
     options.tangents = options.basis == HAIROBB_BASIS_HERMITE ? fuzz_tangents : NULL;
-    /* moving: the steps of the count saved (another count loads as static: a mismatch) */
-    if (saved_time_steps(data, size) >= 2 && saved_time_steps(data, size) <= FUZZ_MAX_STEPS) {
+    /* moving: the steps of the count saved (another count loads as static: a mismatch);
+       never with Hermite, options a caller cannot give (INVALID_ARGUMENT before the file is read) */
+    if (saved_time_steps(data, size) >= 2 && saved_time_steps(data, size) <= FUZZ_MAX_STEPS && options.basis != HAIROBB_BASIS_HERMITE) {
         options.time_steps = saved_time_steps(data, size);
         options.time_vertices = (const float *const *)fuzz_steps[options.time_steps];
     }
