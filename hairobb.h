@@ -7159,25 +7159,28 @@ static void hairobb__tube_at(const hairobb__ray_poly *p, float u, float out[HAIR
 
 static float hairobb__tube_g(const float at[HAIROBB__TUBE_AT], float sheet) { return at[0] + sheet * at[1] * at[3]; }
 
-/* A point in [lo, hi] where q (which 2) or q' (which 3) changes sign (f_lo
-   at lo), to 2^-14 of the step. For q, the end of the last bracket where q
-   >= 0 (outside, S = 0): there both sheets' g are w, so a root of either
-   sheet just inside the interval's true end still shows as a sign change
-   of g between the last sample and this end (a point inside by rounding
-   gave g a z' S term that could hide it). */
-static float hairobb__tube_split(const hairobb__ray_poly *p, float lo, float hi, float f_lo, float f_hi, int which)
+/* Regula falsi with the Illinois rule on [*lo, *hi], where f changes sign
+   (f_lo, f_hi at the ends): f is q (which 2), q' (3) or, for which -1, the
+   sheet's g. At most `steps` steps, while the bracket is wider than
+   tolerance. Returns the last point tried; *exact is set where f is 0
+   there; *lo, *hi: the bracket left. */
+static float hairobb__tube_falsi(const hairobb__ray_poly *p, float *lo_io, float *hi_io, float f_lo, float f_hi, int which,
+                                 float sheet, int steps, float tolerance, int *exact)
 {
     int iteration, side = 0;
-    float tolerance = (hi - lo) * (1.0f / 16384.0f), f_start = f_lo;
-    /* regula falsi with the Illinois rule: q and q' are smooth polynomials,
-       so the bracket closes in a few steps where halving took 14 */
-    for (iteration = 0; iteration < 20 && hi - lo > tolerance; ++iteration) {
-        float at[HAIROBB__TUBE_AT], f, u = lo + (hi - lo) * (f_lo / (f_lo - f_hi));
+    float lo = *lo_io, hi = *hi_io, u = lo;
+    *exact = 0;
+    for (iteration = 0; iteration < steps && hi - lo > tolerance; ++iteration) {
+        float at[HAIROBB__TUBE_AT], f;
+        u = lo + (hi - lo) * (f_lo / (f_lo - f_hi));
         if (!(u > lo && u < hi)) u = 0.5f * (lo + hi);
         if (u <= lo || u >= hi) break;
         hairobb__tube_at(p, u, at);
-        f = at[which + 2];
-        if (f == 0.0f) return u;
+        f = which < 0 ? hairobb__tube_g(at, sheet) : at[which + 2];
+        if (f == 0.0f) {
+            *exact = 1;
+            break;
+        }
         if ((f < 0.0f) == (f_lo < 0.0f)) {
             lo = u;
             f_lo = f;
@@ -7190,39 +7193,35 @@ static float hairobb__tube_split(const hairobb__ray_poly *p, float lo, float hi,
             side = 1;
         }
     }
+    *lo_io = lo;
+    *hi_io = hi;
+    return u;
+}
+
+/* A point in [lo, hi] where q (which 2) or q' (which 3) changes sign (f_lo
+   at lo), to 2^-14 of the step. For q, the end of the last bracket where q
+   >= 0 (outside, S = 0): there both sheets' g are w, so a root of either
+   sheet just inside the interval's true end still shows as a sign change
+   of g between the last sample and this end (a point inside by rounding
+   gave g a z' S term that could hide it). */
+static float hairobb__tube_split(const hairobb__ray_poly *p, float lo, float hi, float f_lo, float f_hi, int which)
+{
+    /* q and q' are smooth polynomials: the bracket closes in a few steps
+       where halving took 14 */
+    int exact;
+    float f_start = f_lo, u = hairobb__tube_falsi(p, &lo, &hi, f_lo, f_hi, which, 0.0f, 20, (hi - lo) * (1.0f / 16384.0f), &exact);
+    if (exact) return u;
     if (which == 2) return f_start < 0.0f ? hi : lo;
     return 0.5f * (lo + hi);
 }
 
 /* The root of a sheet's g in [lo, hi], where it changes sign (g_lo at lo,
-   g_hi at hi): regula falsi with the Illinois rule (no derivative: S's is
-   infinite where the ray leaves the tube's reach), to the float spacing
-   of u or 30 steps. */
+   g_hi at hi): hairobb__tube_falsi (no derivative: S's is infinite where
+   the ray leaves the tube's reach), to the float spacing of u or 30 steps. */
 static float hairobb__tube_root(const hairobb__ray_poly *p, float lo, float hi, float g_lo, float g_hi, float sheet)
 {
-    int iteration, side = 0;
-    float u = lo;
-    for (iteration = 0; iteration < 30; ++iteration) {
-        float at[HAIROBB__TUBE_AT], g;
-        u = lo + (hi - lo) * (g_lo / (g_lo - g_hi));
-        if (!(u > lo && u < hi)) u = 0.5f * (lo + hi);
-        if (u <= lo || u >= hi) break;
-        hairobb__tube_at(p, u, at);
-        g = hairobb__tube_g(at, sheet);
-        if (g == 0.0f) return u;
-        if ((g < 0.0f) == (g_lo < 0.0f)) {
-            lo = u;
-            g_lo = g;
-            if (side == -1) g_hi *= 0.5f;
-            side = -1;
-        } else {
-            hi = u;
-            g_hi = g;
-            if (side == 1) g_lo *= 0.5f;
-            side = 1;
-        }
-    }
-    return u;
+    int exact;
+    return hairobb__tube_falsi(p, &lo, &hi, g_lo, g_hi, -1, sheet, 30, 0.0f, &exact);
 }
 
 /* Records a sheet's hit at u if the ray passes within r of the centre there. */
@@ -7356,7 +7355,7 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
                                    int any_hit)
 {
     hairobb__ray_poly poly;
-    float previous[HAIROBB__TUBE_AT], current[HAIROBB__TUBE_AT], u_previous = 0.0f, start = -1.0f, bernstein[7] = {0, 0, 0, 0, 0, 0, 0}, scale = 0.0f;
+    float previous[HAIROBB__TUBE_AT], current[HAIROBB__TUBE_AT], u_previous, start = -1.0f, bernstein[7] = {0, 0, 0, 0, 0, 0, 0}, scale = 0.0f;
     float min_tangent2 = 0.0f, margin, u_lo, u_hi;
     int k, samples, found = 0;
     /* q's Bernstein coefficients bound it: all of them clearly positive,
@@ -7851,6 +7850,7 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__tube_inside hairobb__tube_inside_avx2
 #define hairobb__tube_root hairobb__tube_root_avx2
 #define hairobb__tube_split hairobb__tube_split_avx2
+#define hairobb__tube_falsi hairobb__tube_falsi_avx2
 #define hairobb__tube_squares hairobb__tube_squares_avx2
 #define hairobb__joint_at hairobb__joint_at_avx2
 #define hairobb__made_moving hairobb__made_moving_avx2
