@@ -1326,6 +1326,18 @@ HAIROBB__INLINE int hairobb__lowest_bit(unsigned bits)
 #endif
 }
 
+/* The number of set bits. */
+HAIROBB__INLINE int hairobb__bit_count(unsigned bits)
+{
+#if defined(__GNUC__) || defined(__clang__)
+    return __builtin_popcount(bits);
+#else
+    bits = bits - ((bits >> 1) & 0x55555555u);
+    bits = (bits & 0x33333333u) + ((bits >> 2) & 0x33333333u);
+    return (int)((((bits + (bits >> 4)) & 0x0f0f0f0fu) * 0x01010101u) >> 24);
+#endif
+}
+
 /* The highest set bit's index; bits != 0. */
 HAIROBB__INLINE int hairobb__highest_bit(unsigned bits)
 {
@@ -6721,25 +6733,29 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
                 } while (bits);
                 continue;
             }
-            /* insertion sort onto the stack, nearest on top; equal
-               distances keep child order */
-            stack_ref[sp] = child[i];
-            stack_dist[sp] = dist[i];
-            ++sp;
-            do {
-                int j = hairobb__lowest_bit((unsigned)bits);
-                float d = dist[j];
-                bits &= bits - 1;
-                for (i = sp; i > base && stack_dist[i - 1] < d; --i) {
-                    stack_ref[i] = stack_ref[i - 1];
-                    stack_dist[i] = stack_dist[i - 1];
-                }
-                stack_ref[i] = child[j];
-                stack_dist[i] = d;
-                hairobb__prefetch_child(bvh, child[j]);
-                ++sp;
-            } while (bits);
-            ref = stack_ref[--sp];
+            /* three or more: onto the stack sorted, nearest on top, equal
+               distances in child order (the higher index above). Each
+               child's place is its rank, the hit children farther than it
+               or as near with a lower index, counted by two compares over
+               the node's lanes: no branch on the distances, where an
+               insertion sort mispredicts about once a child */
+            {
+                hairobb__vn lanes = hairobb__vn_load(dist);
+                unsigned hits = (unsigned)bits | (1u << i), left = hits;
+                do {
+                    int j = hairobb__lowest_bit(left);
+                    hairobb__vn dj = hairobb__vn_set1(dist[j]);
+                    unsigned not_nearer = (unsigned)hairobb__vn_le_bits(dj, lanes);
+                    unsigned not_farther = (unsigned)hairobb__vn_le_bits(lanes, dj);
+                    int at = base + hairobb__bit_count(not_nearer & ~(not_farther & ~((1u << j) - 1u)) & hits);
+                    left &= left - 1u;
+                    stack_ref[at] = child[j];
+                    stack_dist[at] = dist[j];
+                    hairobb__prefetch_child(bvh, child[j]);
+                } while (left);
+                sp = base + hairobb__bit_count(hits) - 1;
+            }
+            ref = stack_ref[sp];
             continue;
         }
         /* widened as the node tests widen tfar: a child pushed before tfar
