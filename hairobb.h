@@ -5912,6 +5912,7 @@ typedef struct hairobb__ray_state {
        are ignored; skip_t = 0 for other rays */
     float skip_t;
     float skip_sheet;           /* tubes: the sheet skipped (+1 entries, -1 exits); 0 ribbons: every hit */
+    float tube_t_base;          /* tubes: t of the point of the ray the segment tested is relative to */
     int skipping;               /* tubes: set while a skipped segment is tested */
     int cap_candidate;          /* tubes: set while an end cap's hit is offered (the filter's hit is the cap's) */
     int hit_cap;                /* tubes: the hit taken is on an end cap */
@@ -6772,17 +6773,36 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
 /* ------------------------------------------------------------------------ */
 /* >>intersector  Ray / curve intersection                                  */
 /* ------------------------------------------------------------------------ */
-/* A segment's control points moved to the ray origin (qx, qy, qz) and its
-   radii r, lane i = control point i. */
-HAIROBB__INLINE void hairobb__ray_points_v4(const hairobb__ray_state *rs, const float *cp, hairobb__v4 *qx,
+/* a + b = sum + *error exactly, round to nearest (Knuth's two-sum) */
+HAIROBB__INLINE float hairobb__two_sum(float a, float b, float *error)
+{
+    float sum = a + b, b_part = sum - a;
+    *error = (a - (sum - b_part)) + (b - b_part);
+    return sum;
+}
+
+/* a b = product + *error exactly, without FMA (Dekker: each factor split
+   into halves of 12 bits, whose products round not at all); barring
+   overflow of 4097 a, 4097 b, and underflow */
+HAIROBB__INLINE float hairobb__two_product(float a, float b, float *error)
+{
+    float product = a * b, split_a = 4097.0f * a, split_b = 4097.0f * b;
+    float a_high = split_a - (split_a - a), a_low = a - a_high, b_high = split_b - (split_b - b), b_low = b - b_high;
+    *error = ((a_high * b_high - product) + a_high * b_low + a_low * b_high) + a_low * b_low;
+    return product;
+}
+
+/* A segment's control points moved to origin (qx, qy, qz) and its radii
+   r, lane i = control point i. */
+HAIROBB__INLINE void hairobb__ray_points_v4(const float origin[3], const float *cp, hairobb__v4 *qx,
                                             hairobb__v4 *qy, hairobb__v4 *qz, hairobb__v4 *r)
 {
     hairobb__v4 p0 = hairobb__v4_load(cp), p1 = hairobb__v4_load(cp + 4);
     hairobb__v4 p2 = hairobb__v4_load(cp + 8), p3 = hairobb__v4_load(cp + 12);
     hairobb__v4_transpose(&p0, &p1, &p2, &p3);
-    *qx = hairobb__v4_sub(p0, hairobb__v4_set1(rs->org[0]));
-    *qy = hairobb__v4_sub(p1, hairobb__v4_set1(rs->org[1]));
-    *qz = hairobb__v4_sub(p2, hairobb__v4_set1(rs->org[2]));
+    *qx = hairobb__v4_sub(p0, hairobb__v4_set1(origin[0]));
+    *qy = hairobb__v4_sub(p1, hairobb__v4_set1(origin[1]));
+    *qz = hairobb__v4_sub(p2, hairobb__v4_set1(origin[2]));
     *r = p3;
 }
 
@@ -7252,7 +7272,7 @@ static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__ray_poly *p,
     /* a root just inside an interval's end can round to q > 0: q within
        its rounding counts as inside (S = 0 there) */
     if (!(at[4] <= at[7] * (8.0f * FLT_EPSILON)) || !(at[6] > min_tangent2)) return 0;
-    t = (at[2] - sheet * at[3]) * rs->inv_dir_length;
+    t = rs->tube_t_base + (at[2] - sheet * at[3]) * rs->inv_dir_length;
     if (rs->cull_back_faces || (rs->skipping && t < rs->skip_t)) {
         /* whether the root faces the ray (an entry, +1) or away (-1), by
            the normal's component along it (ray space: R = (-x, -y, -sheet
@@ -7292,7 +7312,7 @@ static int hairobb__tube_cap(const hairobb_bvh *bvh, hairobb__ray_state *rs, con
     if (!(at[4] + offset * offset <= 0.0f)) return 0;
     sheet = (along > 0.0f) == (end == 0) ? 1.0f : -1.0f;
     if (sheet < 0.0f && rs->cull_back_faces) return 0;
-    t = (at[2] + offset) * rs->inv_dir_length;
+    t = rs->tube_t_base + (at[2] + offset) * rs->inv_dir_length;
     if (rs->skipping && sheet == rs->skip_sheet && t < rs->skip_t) return 0;
     if (!(t >= rs->tnear) || !(t <= rs->tfar) || hairobb__joint_at(bvh, prim, end, rs->time)) return 0;
     rs->cap_candidate = 1;
@@ -7462,7 +7482,7 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
     float max_r, magnitude;
     int inside;
     HAIROBB__COUNT(segment);
-    hairobb__ray_points_v4(rs, cp, &qx, &qy, &qz, &r);
+    hairobb__ray_points_v4(rs->org, cp, &qx, &qy, &qz, &r);
     x = hairobb__ray_row_v4(rs, 0, qx, qy, qz);
     y = hairobb__ray_row_v4(rs, 1, qx, qy, qz);
     max_r = hairobb__v4_hmax(r);
@@ -7508,9 +7528,37 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
     hairobb__v4_store(c.z, z);
     hairobb__v4_store(c.r, r);
     HAIROBB__COUNT(segment_passed);
-    if (bvh->shape == HAIROBB_SHAPE_ROUND ? !hairobb__intersect_tube(bvh, rs, &c, prim, any_hit)
-                                          : !hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit))
+    if (bvh->shape == HAIROBB_SHAPE_ROUND) {
+        /* A tube's points again, relative to the point of the ray at the
+           depth of the segment's ends (as Embree's round curves): relative
+           to a far origin the depth and the offsets from the ray carried a
+           few ulps of the distance (|dt|/r p99 3.2e-3 on crossing 500k,
+           where t's own rounding is about 5e-4). That point is rounded
+           (by far more than r where the ray starts at 1e4): the rounding,
+           kept exactly (hairobb__two_product, hairobb__two_sum), is taken
+           off the differences of the nearby points. */
+        float base[3], error[3], product_error, sum_error;
+        int k;
+        rs->tube_t_base = 0.5f * (c.z[0] + c.z[3]) * rs->inv_dir_length;
+        for (k = 0; k < 3; ++k) {
+            base[k] = hairobb__two_sum(rs->org[k], hairobb__two_product(rs->tube_t_base, rs->dir[k], &product_error), &sum_error);
+            error[k] = product_error + sum_error;   /* the ray's point is base + error */
+        }
+        if (fabsf(error[0]) + fabsf(error[1]) + fabsf(error[2]) < INFINITY) {
+            hairobb__ray_points_v4(base, cp, &qx, &qy, &qz, &r);
+            qx = hairobb__v4_sub(qx, hairobb__v4_set1(error[0]));
+            qy = hairobb__v4_sub(qy, hairobb__v4_set1(error[1]));
+            qz = hairobb__v4_sub(qz, hairobb__v4_set1(error[2]));
+        } else {   /* the split overflowed (|dir| near FLT_MAX): as tested above */
+            rs->tube_t_base = 0.0f;
+        }
+        hairobb__v4_store(c.x, hairobb__ray_row_v4(rs, 0, qx, qy, qz));
+        hairobb__v4_store(c.y, hairobb__ray_row_v4(rs, 1, qx, qy, qz));
+        hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));
+        if (!hairobb__intersect_tube(bvh, rs, &c, prim, any_hit)) return 0;
+    } else if (!hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit)) {
         return 0;
+    }
     if (!any_hit) {   /* the nearest hit so far is on this segment */
         rs->hit_curve = c;
         /* kept for the hit's attributes: no lookup by prim, which misses at scale */
@@ -7727,7 +7775,7 @@ static int hairobb__hit_filtered_out(hairobb__ray_state *rs, uint32_t prim, floa
     const float *cp = hairobb__segment_points(rs->bvh, prim, rs->time, scratch);
     int slot, list;
     if (hairobb__ignored_before(rs, prim, u, t, cp)) return 1;
-    hairobb__ray_points_v4(rs, cp, &qx, &qy, &qz, &r);
+    hairobb__ray_points_v4(rs->org, cp, &qx, &qy, &qz, &r);
     hairobb__v4_store(c.x, hairobb__ray_row_v4(rs, 0, qx, qy, qz));
     hairobb__v4_store(c.y, hairobb__ray_row_v4(rs, 1, qx, qy, qz));
     hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));
@@ -7868,6 +7916,8 @@ HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 #define hairobb__tube_split hairobb__tube_split_avx2
 #define hairobb__tube_falsi hairobb__tube_falsi_avx2
 #define hairobb__tube_squares hairobb__tube_squares_avx2
+#define hairobb__two_product hairobb__two_product_avx2
+#define hairobb__two_sum hairobb__two_sum_avx2
 #define hairobb__joint_at hairobb__joint_at_avx2
 #define hairobb__made_moving hairobb__made_moving_avx2
 #define hairobb__piece_ends hairobb__piece_ends_avx2
