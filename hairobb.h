@@ -9,8 +9,9 @@
    (AABB) or an oriented (OBB) node pays (Woop, Benthin, Wald, Johnson,
    Tabellion, HPG 2014). Nodes are stored compressed (byte rotations and
    byte boxes), the build runs on all cores, and the buffers are Embree's
-   curve buffers. Speed, memory and accuracy figures are in README.md and
-   docs/, each from a named run; this manual describes behaviour.
+   curve buffers. Speed, memory and accuracy figures are in
+   docs/benchmarking.md and docs/accuracy.md, each from a named run; this
+   manual describes behaviour.
 
    MANUAL
       1. QUICK START
@@ -155,10 +156,11 @@
      traces its own copy of every segment's Bezier points and never reads
      the caller's arrays while tracing. Other bases: the BVH keeps a copy
      of the indices too, and the caller's arrays may go after the build.
-     Bezier input: hairobb_save hashes, and hairobb_refit indexes, the
-     arrays last given (build or refit), so a renderer that saves or
-     refits keeps them alive and unchanged until hairobb_free; one that
-     only traces may free them. With bezier_copy OFF, and for moving hair,
+     Bezier input: hairobb_save hashes the copy, and the caller's arrays
+     may go after the build too, except for hairobb_refit, which indexes
+     the indices given to the build: a renderer that refits Bezier input
+     keeps the index array alive and unchanged until hairobb_free. With
+     bezier_copy OFF, and for moving hair,
      the BVH reads the caller's arrays (tangents too) while tracing: they
      must stay alive and unchanged until hairobb_free. To move the hair,
      refit (REFIT) or build again.
@@ -258,8 +260,8 @@
                              _SHARED_ROTATION: one float rotation per node
                              (304/176 bytes). _COMPRESSED: the paper's
                              compressed node, one byte rotation shared by the
-                             children (160/96 bytes). The default takes well
-                             under half the bytes of _PER_CHILD and traces
+                             children (160/96 bytes). The default's nodes take
+                             less than half the bytes of _PER_CHILD's and trace
                              about as fast; one rotation shared by all
                              children bounds them more loosely and traces
                              slower (docs/design.md, docs/benchmarking.md).
@@ -313,20 +315,22 @@
                              bytes on one cache line each, plus 4 bytes a
                              segment (8 for other bases, whose indices are
                              kept for hairobb_refit): about 100 bytes a
-                             segment in all, against Embree's 115-140. A
+                             segment in all, less than Embree's default
+                             (docs/benchmarking.md#memory). A
                              leaf visit then reads the BVH's own lines,
                              not the caller's arrays in whatever order
-                             and pages the caller has them: on 2M-10M
-                             segments of fur in a groom generator's order
-                             it traced 1.2-1.8x as fast as OFF (README),
-                             which is why AUTO means ON. OFF keeps each
+                             and pages the caller has them: on large
+                             scenes in a groom generator's order it
+                             traces markedly faster than OFF
+                             (docs/benchmarking.md#at-scale), which is
+                             why AUTO means ON. OFF keeps each
                              leaf reference's vertex offset in leaf order
                              (4 bytes) and reads the caller's points
                              there, converting other bases each time:
-                             32-40 bytes a segment in all, 0.6-1.0 of
-                             Embree's compact mode's, at 0.7-1.3x its
-                             speed: the mode for hair that would not
-                             fit twice. Both give the same tree and
+                             about a third of the bytes, no more than
+                             Embree's compact mode takes
+                             (docs/benchmarking.md#memory): the mode for
+                             hair that would not fit twice. Both give the same tree and
                              bit-identical hits. Moving hair reads the
                              caller's steps, through the offsets too.
      hit_filter, _user       hit_filter(user, ray, hit) for each hit found
@@ -384,9 +388,10 @@
      segment), 24 bytes a reference of the subtree each thread builds, a
      copy of that subtree's points in Bezier form (72 bytes a reference),
      and the subtrees' nodes, which it holds twice at the end as it copies
-     them into one block. So its peak beyond the BVH is about the BVH's own
-     size again for the default layouts (docs/benchmarking.md has the
-     measured figures).
+     them into one block. So its peak beyond the BVH stays below the BVH's
+     own size without bezier_copy; with the copy (the default), written once
+     that memory is freed, the BVH it returns is the peak
+     (docs/benchmarking.md#memory has the measured figures).
 
 
    9. REFIT
@@ -482,13 +487,17 @@
      segments traced), the node memory, the leaves' segment ids (and the u
      ranges of segments spatial splits clipped, 8 bytes each, where there
      are some) and a 64-bit checksum of all of it, in this host's byte
-     order. It is for
-     builds of this library with the same node width: another format
+     order. hairobb_save writes format HAIROBB_SAVE_FORMAT_VERSION (2 in
+     0.2.0); hairobb_load reads it and the older formats down to
+     HAIROBB_SAVE_FORMAT_OLDEST (1: 0.1.x's, whose hash covered Bezier
+     input's whole arrays, vertex_count points and the indices). It is for
+     builds of this library with the same node width: a newer format
      version, HAIROBB_NODE_WIDTH or byte order is HAIROBB_ERROR_UNSUPPORTED.
-     Other hair is HAIROBB_ERROR_MISMATCH: another segment count or basis,
-     or arrays that differ from the hash (for Bezier input any bit of the
-     vertex_count control points or of the indices; for other bases any bit
-     of the converted curves, so tangents too). verify_hair = HAIROBB_OFF
+     Other hair is HAIROBB_ERROR_MISMATCH: another segment count, vertex
+     count or basis, or segments that differ from the hash (any bit of a
+     segment's Bezier control points, for other bases of the converted
+     curves, so tangents too; for moving hair any bit of every step's
+     arrays). verify_hair = HAIROBB_OFF
      skips the hash (a pass over the arrays) for a renderer that knows its
      hair is the one saved; the arrays are still validated as
      hairobb_build validates them, and every segment id is checked against
@@ -600,9 +609,13 @@
 #include <stdint.h>
 
 #define HAIROBB_VERSION_MAJOR 0
-#define HAIROBB_VERSION_MINOR 1
+#define HAIROBB_VERSION_MINOR 2
 #define HAIROBB_VERSION_PATCH 0
 #define HAIROBB_VERSION (HAIROBB_VERSION_MAJOR * 10000 + HAIROBB_VERSION_MINOR * 100 + HAIROBB_VERSION_PATCH)
+/* The format hairobb_save writes (SAVE AND LOAD); hairobb_load reads it
+   and every format from HAIROBB_SAVE_FORMAT_OLDEST on. */
+#define HAIROBB_SAVE_FORMAT_VERSION 2
+#define HAIROBB_SAVE_FORMAT_OLDEST 1
 
 #if defined(HAIROBB_STATIC) && (defined(__GNUC__) || defined(__clang__))
 #define HAIROBB_DEF static __attribute__((unused)) /* a file need not call every function */
@@ -5327,11 +5340,15 @@ HAIROBB_DEF hairobb_result hairobb_refit_motion(hairobb_bvh *bvh, const float *c
      where flags has HAIROBB__SAVE_RANGES (a spatial-split tree that clipped
      segments), leaf_ranges: u0, u1 of each leaf_prims entry, 8 bytes each;
      a checksum of every byte before it (hairobb__hash), 8 bytes.
-   The hair hash is hairobb__hair_hash of the Bezier segments the BVH
-   traces: the caller's arrays, or for other bases the converted curves,
-   which are not stored (a load converts the caller's arrays again, with
-   the build's code, so the hash also covers tangents). */
-#define HAIROBB__SAVE_VERSION 1u
+   The hair hash (hairobb__traced_hash) covers the Bezier segments the BVH
+   traces, read from the BVH's own copy where it has one, so that a
+   renderer may free Bezier arrays after the build: for other bases the
+   converted curves, which are not stored (a load converts the caller's
+   arrays again, with the build's code, so the hash also covers tangents).
+   Version 1 (0.1.x) hashed Bezier input as the caller's arrays, vertex
+   and index, as they were: it still loads. */
+#define HAIROBB__SAVE_VERSION ((uint32_t)HAIROBB_SAVE_FORMAT_VERSION)
+#define HAIROBB__SAVE_VERSION_OLDEST ((uint32_t)HAIROBB_SAVE_FORMAT_OLDEST)
 #define HAIROBB__SAVE_BYTE_ORDER 0x01020304u
 #define HAIROBB__SAVE_HEADER 128
 #define HAIROBB__SAVE_RANGES 1u         /* leaf_ranges follow leaf_prims */
@@ -5416,18 +5433,20 @@ static uint64_t hairobb__hair_hash(const float *vertices, size_t vertex_count, c
 }
 
 /* hairobb__hair_hash of the Bezier segments a BVH traces, or for motion
-   blur of the caller's arrays (any basis), every step's. Without the
-   copy each segment is converted as it is hashed: the same bytes
-   hairobb__hash reads from the copy (two of its 32-byte blocks a segment,
-   then the indices 4 i), so a BVH saved with the copy loads without it and
-   back. */
-static uint64_t hairobb__traced_hash(const hairobb_bvh *bvh)
+   blur of the caller's arrays (any basis), every step's. Each segment's
+   points are read where the BVH reads them (hairobb__segment_points: the
+   copy's, or converted as they are hashed): the same bytes
+   hairobb__hash reads from a copy in segment order (two of its 32-byte
+   blocks a segment, then the indices 4 i), so a BVH saved with the copy
+   loads without it and back. Format version 1 hashed static Bezier input
+   as the caller's arrays. */
+static uint64_t hairobb__traced_hash(const hairobb_bvh *bvh, uint32_t version)
 {
     size_t n = bvh->segment_count, i;
     uint64_t lane[4], word[4], h;
     uint32_t ix[8];
     int k, j;
-    if (bvh->point_basis == HAIROBB_BASIS_BEZIER || bvh->time_steps) {   /* the arrays as they are */
+    if ((version < 2u && bvh->point_basis == HAIROBB_BASIS_BEZIER) || bvh->time_steps) {   /* the arrays as they are */
         size_t vertex_count = hairobb__traced_vertex_count(bvh);
         h = hairobb__hair_hash(bvh->vertices, vertex_count, bvh->indices, n);
         for (k = 1; k < (int)bvh->time_steps; ++k) h = hairobb__hash(h, bvh->time_vertices[k], 4 * sizeof(float) * vertex_count);
@@ -5501,7 +5520,7 @@ HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, si
     hairobb__put32(out + HAIROBB__AT_FLAGS, bvh->leaf_ranges ? HAIROBB__SAVE_RANGES : 0u);
     hairobb__put64(out + HAIROBB__AT_SEGMENTS, bvh->segment_count);
     hairobb__put64(out + HAIROBB__AT_VERTICES, hairobb__traced_vertex_count(bvh));
-    hairobb__put64(out + HAIROBB__AT_HAIR_HASH, hairobb__traced_hash(bvh));
+    hairobb__put64(out + HAIROBB__AT_HAIR_HASH, hairobb__traced_hash(bvh, HAIROBB__SAVE_VERSION));
     hairobb__put32(out + HAIROBB__AT_TIME_STEPS, bvh->time_steps);
     hairobb__put32(out + HAIROBB__AT_SHAPE, (uint32_t)bvh->shape | (bvh->end_caps ? HAIROBB__SAVE_CAPS : 0u) |
                                             (bvh->cull_back_faces ? HAIROBB__SAVE_CULL : 0u));
@@ -5602,7 +5621,7 @@ static unsigned hairobb__layout_types(hairobb_obb_layout layout, hairobb_node_po
 typedef struct hairobb__saved {
     uint64_t node_bytes, leaf_prim_count, segments;
     size_t leaf_bytes, range_bytes;
-    uint32_t basis, steps;
+    uint32_t version, basis, steps;
     hairobb__tree_settings tree;      /* set once the header's words are in range */
 } hairobb__saved;
 
@@ -5617,7 +5636,8 @@ static hairobb_result hairobb__read_saved(const unsigned char *in, size_t size, 
     int k;
     if (size < HAIROBB__SAVE_HEADER + 8 || memcmp(in, hairobb__save_magic, sizeof hairobb__save_magic) != 0)
         return HAIROBB_ERROR_INVALID_FILE;
-    if (hairobb__get32(in + HAIROBB__AT_VERSION) != HAIROBB__SAVE_VERSION ||
+    saved->version = hairobb__get32(in + HAIROBB__AT_VERSION);
+    if (saved->version < HAIROBB__SAVE_VERSION_OLDEST || saved->version > HAIROBB__SAVE_VERSION ||
         hairobb__get32(in + HAIROBB__AT_BYTE_ORDER) != HAIROBB__SAVE_BYTE_ORDER || hairobb__get32(in + HAIROBB__AT_WIDTH) != HAIROBB__W)
         return HAIROBB_ERROR_UNSUPPORTED;
     saved->node_bytes = hairobb__get64(in + HAIROBB__AT_NODE_BYTES);
@@ -5770,7 +5790,7 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
     if (!hairobb__take_hair(bvh, &opt, vertices, vertex_count, indices, segment_count, steps)) goto failed;
     if (opt.verify_hair != HAIROBB_OFF &&
         (hairobb__get64(in + HAIROBB__AT_VERTICES) != (uint64_t)hairobb__traced_vertex_count(bvh) ||
-         hairobb__get64(in + HAIROBB__AT_HAIR_HASH) != hairobb__traced_hash(bvh))) {
+         hairobb__get64(in + HAIROBB__AT_HAIR_HASH) != hairobb__traced_hash(bvh, saved.version))) {
         result = HAIROBB_ERROR_MISMATCH;
         goto failed;
     }
@@ -5836,7 +5856,8 @@ HAIROBB_DEF hairobb_result hairobb_load_file(const char *path,
     else if (!hairobb__file_length(file, &length))
         result = HAIROBB_ERROR_IO;
     else if (memcmp(header, hairobb__save_magic, sizeof hairobb__save_magic) == 0 &&
-             hairobb__get32(header + HAIROBB__AT_VERSION) == HAIROBB__SAVE_VERSION &&
+             hairobb__get32(header + HAIROBB__AT_VERSION) >= HAIROBB__SAVE_VERSION_OLDEST &&
+             hairobb__get32(header + HAIROBB__AT_VERSION) <= HAIROBB__SAVE_VERSION &&
              hairobb__get32(header + HAIROBB__AT_BYTE_ORDER) == HAIROBB__SAVE_BYTE_ORDER &&
              hairobb__get32(header + HAIROBB__AT_WIDTH) == HAIROBB__W &&
              (hairobb__get64(header + HAIROBB__AT_NODE_BYTES) > length ||
