@@ -1181,6 +1181,8 @@ static void *hairobb__malloc_large(size_t bytes, void *user)
 #define HAIROBB__DEFAULT_OBB_LAYOUT HAIROBB_OBB_COMPRESSED_PER_CHILD
 #define HAIROBB__DEFAULT_SPATIAL_SPLITS HAIROBB_OFF
 #define HAIROBB__DEFAULT_CLUSTERING HAIROBB_OFF
+#define HAIROBB__DEFAULT_BEZIER_COPY HAIROBB_ON
+#define HAIROBB__DEFAULT_VERIFY_HAIR HAIROBB_ON
 #define HAIROBB__MAX_THREADS 256u
 #define HAIROBB__MAX_TIME_STEPS 65535u   /* a saved BVH keeps them in 16 bits' range */
 #define HAIROBB__MAX_SPLIT_BUDGET 4.0f
@@ -1579,6 +1581,8 @@ static hairobb_result hairobb__resolve_options(const hairobb_build_options *give
 {
     if (hairobb__bad_option(given, purpose)) return HAIROBB_ERROR_INVALID_ARGUMENT;
     if (given) *opt = *given; else memset(opt, 0, sizeof *opt);
+    if (opt->bezier_copy == HAIROBB_AUTO) opt->bezier_copy = HAIROBB__DEFAULT_BEZIER_COPY;
+    if (opt->verify_hair == HAIROBB_AUTO) opt->verify_hair = HAIROBB__DEFAULT_VERIFY_HAIR;
     if (purpose == HAIROBB__FOR_LOAD) return HAIROBB_OK;
     if (opt->max_leaf_size == 0) opt->max_leaf_size = HAIROBB__DEFAULT_MAX_LEAF;
     if (opt->hair_space_candidates == 0) opt->hair_space_candidates = HAIROBB__DEFAULT_CANDIDATES;
@@ -1699,7 +1703,7 @@ static int hairobb__take_hair(hairobb_bvh *bvh, const hairobb_build_options *opt
         if (!bvh->time_vertices) return 0;
         bvh->time_steps = steps;
     }
-    bvh->copy_points = opt->bezier_copy != HAIROBB_OFF && !steps;
+    bvh->copy_points = opt->bezier_copy == HAIROBB_ON && !steps;
     if (bvh->copy_points && opt->basis != HAIROBB_BASIS_BEZIER) {
         bvh->owned_indices = HAIROBB__CAST(uint32_t *, hairobb__malloc_large(segment_count * sizeof(uint32_t), bvh->allocator_user));
         if (!bvh->owned_indices) return 0;
@@ -4845,18 +4849,7 @@ static hairobb_result hairobb__copy_points(hairobb_bvh *bvh)
     job.per_task = refs / HAIROBB__TASKS + 1;
     if (job.per_task < HAIROBB__COPY_TASK) job.per_task = HAIROBB__COPY_TASK;
     tasks = (unsigned)((refs + job.per_task - 1) / job.per_task);
-    if (tasks <= 1) {
-        hairobb__copy_task(&job, 0);
-    } else if (bvh->parallel_for) {
-        bvh->parallel_for(bvh->parallel_for_user, tasks, hairobb__copy_task, &job);
-    } else {
-        hairobb__pool pool;
-        memset(&pool, 0, sizeof pool);
-        pool.task_count = tasks;
-        pool.run = hairobb__copy_task;
-        pool.context = &job;
-        hairobb__run_tasks_on_threads(&pool, bvh->threads);
-    }
+    hairobb__run_parts(bvh->threads, bvh->parallel_for, bvh->parallel_for_user, tasks, hairobb__copy_task, &job);
     for (k = 0; k < tasks; ++k)
         if (!job.ran[k]) hairobb__copy_task(&job, k);   /* those a user's parallel_for skipped */
     return HAIROBB_OK;
@@ -5250,16 +5243,7 @@ static void hairobb__refit_tree(hairobb_bvh *bvh)
         size_t task_count = f.task_count;
         f.task_count = 0;
         hairobb__refit_top(&f, bvh->root, 0, count, 0, &box);
-        if (bvh->parallel_for) {
-            bvh->parallel_for(bvh->parallel_for_user, (unsigned)task_count, hairobb__refit_task_at, &f);
-        } else {
-            hairobb__pool pool;
-            memset(&pool, 0, sizeof pool);
-            pool.task_count = task_count;
-            pool.run = hairobb__refit_task_at;
-            pool.context = &f;
-            hairobb__run_tasks_on_threads(&pool, bvh->threads);
-        }
+        hairobb__run_parts(bvh->threads, bvh->parallel_for, bvh->parallel_for_user, task_count, hairobb__refit_task_at, &f);
         for (k = 0; k < task_count; ++k)
             if (!f.tasks[k].ran) hairobb__refit_task_at(&f, (unsigned)k);
         f.task_count = 0;
@@ -5788,7 +5772,7 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
     bvh->allocator_user = opt.allocator_user;
     result = HAIROBB_ERROR_OUT_OF_MEMORY;
     if (!hairobb__take_hair(bvh, &opt, vertices, vertex_count, indices, segment_count, steps)) goto failed;
-    if (opt.verify_hair != HAIROBB_OFF &&
+    if (opt.verify_hair == HAIROBB_ON &&
         (hairobb__get64(in + HAIROBB__AT_VERTICES) != (uint64_t)hairobb__traced_vertex_count(bvh) ||
          hairobb__get64(in + HAIROBB__AT_HAIR_HASH) != hairobb__traced_hash(bvh, saved.version))) {
         result = HAIROBB_ERROR_MISMATCH;
