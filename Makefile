@@ -82,8 +82,8 @@ $(B):
 # width, check_ without Embree (make check), asan_/tsan_ under a sanitizer.
 # Every test program depends on the header and every shared test header;
 # its flags beyond the build's own are TEST_FLAGS_<name>.
-TEST_HEADERS = hairobb.h tests/check.h tests/test_alloc.h tests/test_data.h tests/scratch.h tests/reference.h tests/ref_tube.h \
-               tests/ref_bases.h tests/scenes.h tests/embree_wrap.h
+TEST_HEADERS = hairobb.h tests/check.h tests/compare.h tests/random.h tests/test_alloc.h tests/test_data.h tests/scratch.h \
+               tests/reference.h tests/ref_tube.h tests/ref_bases.h tests/scenes.h tests/embree_wrap.h
 TEST_FLAGS_test_unit            = -DHAIROBB_NODE_WIDTH=4
 TEST_FLAGS_test_unit_w8         = -DHAIROBB_NODE_WIDTH=8
 TEST_FLAGS_test_refit           = -DHAIROBB_NODE_WIDTH=8
@@ -140,7 +140,7 @@ $(B)/test_simd_w8: $(B)/simd_plain_w8.o $(B)/simd_sse_w8.o $(B)/simd_avx_w8.o $(
 $(B)/fuzz_%: tests/fuzz/fuzz_%.c tests/fuzz/fuzz_checks.h hairobb.h | $(B) deps
 	$(FUZZCC) $(FUZZ) $< -o $@ $(LIBS)
 # saved BVHs, checksum fixed up, loaded over a fixed scene (scenes.h)
-$(B)/fuzz_load: tests/scenes.h
+$(B)/fuzz_load: tests/scenes.h tests/random.h
 # a script running fuzzer $< over corpus $(1) for $(2) seconds
 fuzz_script = @printf '\#!/bin/sh\nexec sh tests/fuzz/fuzz_run.sh $< tests/fuzz/corpus/$(1) $(2)\n' > $@ && chmod +x $@
 $(B)/fuzz_build_60s: $(B)/fuzz_build tests/fuzz/fuzz_run.sh
@@ -159,11 +159,14 @@ fuzz: $(B)/fuzz_build $(B)/fuzz_hair $(B)/fuzz_load
 BENCH_FLAGS_bench         = -DBENCH_CFLAGS='"$(BASE) $(ARCH)"'
 BENCH_FLAGS_bench_counted = -DBENCH_COUNTS
 BENCH_FLAGS_bench_profile = -fno-pie -no-pie
-# (its parts: bench/bench.h; hairobb's implementation is in bench/harness.c)
+# (its parts: bench/bench.h; hairobb's implementation is in bench/harness.c;
+# what it shares with the tests: BENCH_TEST_HEADERS)
 BENCH_SOURCES = bench/bench.c bench/options.c bench/variants.c bench/memory.c bench/scenes.c bench/layout.c bench/harness.c \
                 bench/accuracy.c bench/report.c bench/tsv_chart.c bench/mode_scenes.c bench/mode_builds.c \
-                bench/mode_motion.c bench/mode_animate.c bench/mode_save_load.c
-$(B)/bench $(B)/bench_counted $(B)/bench_profile: $(BENCH_SOURCES) bench/bench.h bench/alloc_meter.h hairobb.h tests/reference.h tests/scenes.h tests/test_data.h tests/embree_wrap.h | $(B) deps
+                bench/mode_motion.c bench/mode_animate.c bench/mode_save_load.c bench/progress.c
+BENCH_TEST_HEADERS = tests/compare.h tests/embree_wrap.h tests/random.h tests/reference.h tests/ref_tube.h tests/scenes.h \
+                     tests/test_alloc.h tests/test_data.h
+$(B)/bench $(B)/bench_counted $(B)/bench_profile: $(BENCH_SOURCES) bench/bench.h hairobb.h $(BENCH_TEST_HEADERS) | $(B) deps
 	$(CC) $(BASE) $(ARCH) $(BENCH_FLAGS_$(@F)) $(BENCH_SOURCES) -o $@ $(EMBREE) -lpthread $(LIBS)
 
 # Same trees: a hash of each tree (scenes x option sets x 1 and 2 build
@@ -173,10 +176,11 @@ $(B)/bench $(B)/bench_counted $(B)/bench_profile: $(BENCH_SOURCES) bench/bench.h
 TREE_HASH_FLAGS_tree_hash       =
 TREE_HASH_FLAGS_tree_hash_w4    = -DHAIROBB_NODE_WIDTH=4
 TREE_HASH_FLAGS_tree_hash_plain = -DHAIROBB_NO_SIMD
-$(B)/tree_hash $(B)/tree_hash_w4 $(B)/tree_hash_plain: bench/tree_hash.c bench/alloc_meter.h hairobb.h tests/scenes.h tests/test_data.h | $(B)
+$(B)/tree_hash $(B)/tree_hash_w4 $(B)/tree_hash_plain: bench/tree_hash.c hairobb.h tests/compare.h tests/random.h tests/scenes.h \
+                                                     tests/test_alloc.h tests/test_data.h | $(B)
 	$(CC) $(BASE) $(ARCH) $(TREE_HASH_FLAGS_$(@F)) $< -o $@ $(LIBS)
 # instructions a ray of moving hair under callgrind (bench/motion_cost.c)
-$(B)/motion_cost: bench/motion_cost.c hairobb.h tests/scenes.h | $(B)
+$(B)/motion_cost: bench/motion_cost.c hairobb.h tests/random.h tests/scenes.h | $(B)
 	$(CC) $(BASE) $< -o $@ $(LIBS)
 tree-hashes: $(B)/tree_hash $(B)/tree_hash_w4 $(B)/tree_hash_plain
 	@for p in tree_hash tree_hash_w4 tree_hash_plain; do echo "== $$p"; $(B)/$$p || exit 1; done > $(B)/tree-hashes.txt

@@ -19,15 +19,10 @@
    both copies the same way. */
 #define _POSIX_C_SOURCE 200809L
 #include "ab.h"
+#include "../tests/compare.h"   /* compare_doubles */
 #include "../tests/test_data.h"
 #include <stdio.h>
 #include <stdlib.h>
-
-static int compare_doubles(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
 
 static size_t parse_count(const char *text)
 {

@@ -53,7 +53,7 @@ int accuracy_pick(const ray_set *primary, size_t wanted, accuracy_set *a)
     scene_rng rng;
     scene_rng_seed(&rng, 777);
     for (size_t i = 0; i < n; i++) {
-        size_t j = i + (size_t)(((uint64_t)scene_rng_u32(&rng) * (primary->count - i)) >> 32);
+        size_t j = i + scene_rng_below(&rng, (uint32_t)(primary->count - i));
         uint32_t chosen = order[j];
         order[j] = order[i];
         order[i] = chosen;
@@ -113,64 +113,32 @@ void accuracy_free(accuracy_set *a)
     memset(a, 0, sizeof *a);
 }
 
-/* Nearest-rank percentile of a sorted array. */
-static double percentile(const double *sorted, size_t n, double p)
-{
-    return n ? sorted[(size_t)(p * (double)(n - 1) + 0.5)] : NAN;
-}
-
+/* The tracer's answers on the set's rays against the reference's (the
+   tube reference's where tube is set): tests/compare.h's tally. */
 int accuracy_measure(const tracer *t, const accuracy_set *a, int tube, accuracy_summary *out)
 {
     size_t n = a->rays.count;
+    accuracy_tally tally;
     memset(out, 0, sizeof *out);
-    hit_record *hits = (hit_record *)malloc((n ? n : 1) * sizeof(hit_record));
-    double *t_errors = (double *)malloc((n ? n : 1) * sizeof(double));
-    double *u_errors = (double *)malloc((n ? n : 1) * sizeof(double));
-    if (!hits || !t_errors || !u_errors) {
-        free(hits);
-        free(t_errors);
-        free(u_errors);
+    if (tube && !a->tube)
         return 1;
-    }
-    if (tube && !a->tube) {
+    hit_record *hits = (hit_record *)malloc((n ? n : 1) * sizeof(hit_record));
+    if (!hits || accuracy_tally_init(&tally, n) != 0) {
         free(hits);
-        free(t_errors);
-        free(u_errors);
         return 1;
     }
     trace_pass(t, &a->rays, hits, 1);
-    out->rays = n;
     for (size_t i = 0; i < n; i++) {
-        int hit = hits[i].prim != NO_HIT;
-        double ref_t = tube ? a->tube[i].t : a->ref[i].t, ref_r = tube ? a->tube[i].r : a->ref[i].r;
-        double ref_u = tube ? a->tube[i].u : a->ref[i].u;
-        uint32_t ref_prim = tube ? a->tube[i].prim_id : a->ref[i].prim_id;
-        if (hit != (tube ? a->tube_hits[i] : a->ref_hits[i])) {
-            out->disagreements++;
-            continue;
-        }
-        if (!hit)
-            continue;
-        if (ref_r > 0.0)
-            t_errors[out->t_compared++] = fabs((double)hits[i].t - ref_t) / ref_r;
-        /* u on another segment is a different curve's parameter */
-        if (hits[i].prim == ref_prim)
-            u_errors[out->u_compared++] = fabs((double)hits[i].u - ref_u);
+        const hit_record *h = &hits[i];
+        if (tube)
+            accuracy_tally_add(&tally, a->tube_hits[i], a->tube[i].t, a->tube[i].u, a->tube[i].prim_id, a->tube[i].r,
+                               h->prim != NO_HIT, h->t, h->u, h->prim);
+        else
+            accuracy_tally_add(&tally, a->ref_hits[i], a->ref[i].t, a->ref[i].u, a->ref[i].prim_id, a->ref[i].r,
+                               h->prim != NO_HIT, h->t, h->u, h->prim);
     }
-    qsort(t_errors, out->t_compared, sizeof(double), compare_doubles);
-    qsort(u_errors, out->u_compared, sizeof(double), compare_doubles);
-    out->t_median = percentile(t_errors, out->t_compared, 0.5);
-    out->t_p99 = percentile(t_errors, out->t_compared, 0.99);
-    out->t_max = percentile(t_errors, out->t_compared, 1.0);
-    out->u_median = percentile(u_errors, out->u_compared, 0.5);
-    out->u_p99 = percentile(u_errors, out->u_compared, 0.99);
+    accuracy_summarize(&tally, out);
+    accuracy_tally_free(&tally);
     free(hits);
-    free(t_errors);
-    free(u_errors);
     return 0;
-}
-
-double disagreement_percent(const accuracy_summary *a)
-{
-    return a->rays ? 100.0 * (double)a->disagreements / (double)a->rays : NAN;
 }

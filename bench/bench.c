@@ -35,7 +35,7 @@ int main(int argc, char **argv)
         return 2;
     show_progress = isatty(STDERR_FILENO) && !o.quiet;
     memory_limit_bytes = o.memory_mb * (size_t)1048576;
-    alloc_meter_init(&hairobb_meter, 0);
+    test_allocator_init_meter(&hairobb_meter, 0);
 
     print_machine(&o);
     if (o.animate_frames)

@@ -1,22 +1,30 @@
 /* bench.h - what the parts of the bench share. bench/bench.c says what the
    bench measures and how; the Makefile's $(B)/bench rule compiles the parts
-   together in one command line.
+   together in one command line. Each part calls only parts listed before
+   it, so that the parts can be read, and changed, from the top of the list
+   down:
 
-     bench.c           main: the options, then one mode
-     options.c         the command line: defaults, --help, parsing
-     variants.c        the variants (hairobb options, Embree curves), their groups, building one
+     progress.c        progress lines on stderr
      memory.c          the memory a build would take, and what each step took
-     scenes.c          scenes and their ray sets (primary, incoherent, shadow)
      layout.c          the scene's arrays: the strands' order, plain or huge-page memory
+     scenes.c          scenes and their ray sets (primary, incoherent, shadow)
+     options.c         the command line: defaults, --help, parsing
      harness.c         hairobb's implementation, the tracers, the parallel loop, timing in rounds
+     variants.c        the variants (hairobb options, Embree curves), their groups, building one
      accuracy.c        the reference's answers, and a tracer's errors against them
-     report.c          progress lines, the machine, the tables
+     report.c          the machine, the tables
      tsv_chart.c       the TSV, and the run time against error chart (bench/plot.gp)
      mode_scenes.c     the default mode and --profile: each scene's variants built, timed, checked
      mode_builds.c     --builds: build time against Embree, in rounds
      mode_motion.c     --motion: motion blur against Embree
      mode_animate.c    --animate N: refit against rebuild over an animation
      mode_save_load.c  --save-load: save and load against build
+     bench.c           main: the options, then one mode
+
+   What the bench shares with the tests comes from tests/: the scenes
+   (scenes.h, random.h), the references (reference.h, ref_tube.h), Embree
+   (embree_wrap.h), the counting allocator (test_alloc.h) and the hit
+   comparisons and percentiles (compare.h).
 
    Every part includes this header first: it sets the feature macros before
    any system header. */
@@ -38,9 +46,10 @@ extern bench_counts bench_count;
 #define HAIROBB__COUNT(what) (++bench_count.what)
 #endif
 
-/* hairobb's allocations go through a counting allocator: the build's peak */
-#include "bench/alloc_meter.h"
+/* hairobb's allocations go through the tests' counting allocator: the build's peak */
+#include "tests/test_alloc.h"
 #include "hairobb.h"
+#include "tests/compare.h"
 #include "tests/embree_wrap.h"
 #include "tests/reference.h"
 #include "tests/ref_tube.h"
@@ -231,7 +240,8 @@ typedef struct spread {
 /* Accuracy                                                                 */
 /* ======================================================================== */
 
-/* The reference's answers on a fixed random subset of the primary rays. */
+/* The reference's answers on a fixed random subset of the primary rays (a
+   tracer's figures against them: tests/compare.h's accuracy_summary). */
 typedef struct accuracy_set {
     ray_set rays;      /* copies of the chosen primary rays */
     ref_hit *ref;
@@ -240,12 +250,6 @@ typedef struct accuracy_set {
     int *tube_hits;
     double seconds;    /* reference build + trace */
 } accuracy_set;
-
-typedef struct accuracy_summary {
-    size_t rays, disagreements, t_compared, u_compared;
-    double t_median, t_p99, t_max; /* |t - t_ref| / r_ref where both hit */
-    double u_median, u_p99;        /* |u - u_ref| where both hit the same segment */
-} accuracy_summary;
 
 /* ======================================================================== */
 /* A scene's workload and results                                           */
@@ -312,23 +316,12 @@ typedef struct built_accel {
 /* Functions, by the part that defines them                                 */
 /* ======================================================================== */
 
-/* options.c: returns 0 to run, 1 on a usage error, 2 after --help */
-int parse_options(int argc, char **argv, options *o);
+/* In the order of the list above: each part calls only those before it. */
 
-/* variants.c */
-extern alloc_meter hairobb_meter;
-int variant_index(const char *key);
-int select_variants(const char *list, int selected[VARIANT_COUNT]);
-hairobb_basis variant_basis(const variant *v, const hair_scene *s);
-int variant_comparable(const variant *v, scene_basis basis);
-/* round curves (hairobb's or Embree's): measured against the tube reference */
-int variant_is_tube(const variant *v);
-int spawn_variant(const hair_scene *s);
-hairobb_bvh *build_metered(const hair_scene *s, const float *vertices, hairobb_build_options *build_options,
-                           const char *what, double *seconds, size_t *transient_bytes);
-hairobb_bvh *build_hairobb(const hair_scene *s, const variant *v, double *seconds, size_t *transient_bytes);
-int build_and_record(workload *w, const variant *v, built_accel *accel, variant_result *r);
-void free_variant(built_accel *b);
+/* progress.c */
+extern int show_progress; /* stderr is a terminal and --quiet was not given */
+void progress(const char *format, ...);
+void progress_start(const char *format, ...);
 
 /* memory.c */
 extern size_t memory_limit_bytes; /* --memory-mb, else 0 */
@@ -355,6 +348,9 @@ int primary_rays(const hair_scene *s, int resolution, ray_set *rays);
 int secondary_rays(const hair_scene *s, const ray_set *primary, const hit_record *hits, ray_set *incoherent,
                    ray_set *shadow);
 
+/* options.c: returns 0 to run, 1 on a usage error, 2 after --help */
+int parse_options(int argc, char **argv, options *o);
+
 /* harness.c */
 tracer hairobb_tracer(const hairobb_bvh *bvh);
 tracer embree_tracer(const emb_scene *scene);
@@ -362,10 +358,25 @@ typedef void (*block_work)(void *context, size_t begin, size_t end);
 void parallel_for(size_t count, unsigned thread_count, block_work work, void *context);
 unsigned max_threads(const options *o);
 double trace_pass(const tracer *t, const ray_set *rays, hit_record *hits, unsigned thread_count);
-int compare_doubles(const void *a, const void *b);
 spread spread_of(const double *values, int n);
 const char *spread_cell(char *cell, size_t size, spread x);
-void time_in_rounds(const options *o, workload *w, built_accel accel[VARIANT_COUNT], scene_result *sr);
+void time_in_rounds(const options *o, workload *w, built_accel accel[VARIANT_COUNT], scene_result *sr, int base, int compact,
+                    int peer);
+
+/* variants.c */
+extern test_allocator hairobb_meter;
+int variant_index(const char *key);
+int select_variants(const char *list, int selected[VARIANT_COUNT]);
+hairobb_basis variant_basis(const variant *v, const hair_scene *s);
+int variant_comparable(const variant *v, scene_basis basis);
+/* round curves (hairobb's or Embree's): measured against the tube reference */
+int variant_is_tube(const variant *v);
+int spawn_variant(const hair_scene *s);
+hairobb_bvh *build_metered(const hair_scene *s, const float *vertices, hairobb_build_options *build_options,
+                           const char *what, double *seconds, size_t *transient_bytes);
+hairobb_bvh *build_hairobb(const hair_scene *s, const variant *v, double *seconds, size_t *transient_bytes);
+int build_and_record(workload *w, const variant *v, built_accel *accel, variant_result *r);
+void free_variant(built_accel *b);
 
 /* accuracy.c */
 void reference_trace(const ref_scene *reference, accuracy_set *a, size_t first, size_t end, unsigned thread_count);
@@ -374,12 +385,8 @@ int accuracy_prepare(const hair_scene *s, const ray_set *primary, size_t wanted,
                      accuracy_set *a);
 void accuracy_free(accuracy_set *a);
 int accuracy_measure(const tracer *t, const accuracy_set *a, int tube, accuracy_summary *out);
-double disagreement_percent(const accuracy_summary *a);
 
 /* report.c */
-extern int show_progress; /* stderr is a terminal and --quiet was not given */
-void progress(const char *format, ...);
-void progress_start(const char *format, ...);
 void print_machine(const options *o);
 void print_scene_line(const workload *w);
 void print_scene_header(const options *o, const workload *w);

@@ -169,12 +169,6 @@ unsigned max_threads(const options *o)
     return most;
 }
 
-int compare_doubles(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
 spread spread_of(const double *values, int n)
 {
     spread out = {NAN, NAN, NAN};
@@ -200,11 +194,13 @@ const char *spread_cell(char *cell, size_t size, spread x)
 }
 
 /* Times every built variant on each ray set and thread count, in rounds
-   (bench/bench.c says why); fills mrays and ratio. */
-void time_in_rounds(const options *o, workload *w, built_accel accel[VARIANT_COUNT], scene_result *sr)
+   (bench/bench.c says why); fills mrays, ratio (to variant base, within
+   each round) and compact's peer_ratio (to variant peer). The caller looks
+   the three up (variant_index): the harness knows no variant by name. */
+void time_in_rounds(const options *o, workload *w, built_accel accel[VARIANT_COUNT], scene_result *sr, int base, int compact,
+                    int peer)
 {
     static double mrays[VARIANT_COUNT][MAX_ROUNDS];
-    int base = variant_index(BASELINE_KEY), compact = variant_index(COMPACT_KEY), peer = variant_index(COMPACT_PEER_KEY);
     for (int k = 0; k < RAY_KIND_COUNT; k++) {
         const ray_set *rays = &w->rays[k];
         if (!o->ray_kind_enabled[k] || rays->count == 0)

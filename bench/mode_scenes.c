@@ -236,7 +236,7 @@ static int run_scene(const options *o, int index, const int requested[VARIANT_CO
         if (selected[i])
             build_and_record(&w, &all_variants[i], &accel[i], &sr->variants[i]);
     rss_step_begin(&w.trace_rss);
-    time_in_rounds(o, &w, accel, sr);
+    time_in_rounds(o, &w, accel, sr, variant_index(BASELINE_KEY), variant_index(COMPACT_KEY), variant_index(COMPACT_PEER_KEY));
     rss_step_end(&w.trace_rss);
     for (int i = 0; i < VARIANT_COUNT; i++) {
         variant_result *r = &sr->variants[i];

@@ -1,44 +1,8 @@
-/* report.c - what the bench prints: progress lines on stderr, the machine
-   it ran on, and each scene's tables on stdout (build and memory, speed,
-   accuracy, process memory), then the ablation and the run time against
-   error over all scenes. */
+/* report.c - what the bench prints on stdout: the machine it ran on, and
+   each scene's tables (build and memory, speed, accuracy, process memory),
+   then the ablation and the run time against error over all scenes.
+   (Progress lines on stderr: progress.c.) */
 #include "bench/bench.h"
-
-/* ======================================================================== */
-/* Progress                                                                 */
-/* ======================================================================== */
-
-int show_progress; /* stderr is a terminal and --quiet was not given */
-
-/* Progress lines: progress() writes a line, or ends one that
-   progress_start() began with what is about to run, so that a slow step
-   shows what it is while it runs and its outcome after. */
-static void progress_write(const char *format, va_list args, const char *end)
-{
-    vfprintf(stderr, format, args);
-    fputs(end, stderr);
-    fflush(stderr);
-}
-
-void progress(const char *format, ...)
-{
-    if (!show_progress)
-        return;
-    va_list args;
-    va_start(args, format);
-    progress_write(format, args, "\n");
-    va_end(args);
-}
-
-void progress_start(const char *format, ...)
-{
-    if (!show_progress)
-        return;
-    va_list args;
-    va_start(args, format);
-    progress_write(format, args, "... ");
-    va_end(args);
-}
 
 /* ======================================================================== */
 /* Machine description                                                      */

@@ -10,7 +10,7 @@
                                    output before and after a change (diff);
                                    bench/results/tree-hashes-*.txt.
    build/tree_hash --memory        the same builds' peak transient bytes a
-                                   segment (alloc_meter.h: the peak of the
+                                   segment (tests/test_alloc.h: the peak of the
                                    library's allocations during the build
                                    minus the BVH's hairobb_memory_bytes) and
                                    the blocks live at that peak.
@@ -23,9 +23,10 @@
    Build instructions a segment = the Ir callgrind reports / segments. */
 #define _POSIX_C_SOURCE 200809L
 #define _DEFAULT_SOURCE   /* madvise(MADV_HUGEPAGE), as gnu C and C++ builds have it (HAIROBB_NO_HUGE_PAGES) */
-#include "bench/alloc_meter.h"
+#include "tests/test_alloc.h"
 #define HAIROBB_IMPLEMENTATION
 #include "hairobb.h"
+#include "tests/compare.h"
 #include "tests/scenes.h"
 
 #include <stdio.h>
@@ -81,30 +82,21 @@ enum { OPTION_SETS = sizeof option_sets / sizeof option_sets[0] };
 static const char *const scene_names[] = {"combed", "curly", "crossing", "random", "straight", "furball"};
 enum { SCENES = sizeof scene_names / sizeof scene_names[0] };
 
-/* FNV-1a, 64 bits */
-static uint64_t hash_bytes(uint64_t h, const void *data, size_t size)
-{
-    const unsigned char *p = (const unsigned char *)data;
-    size_t i;
-    for (i = 0; i < size; ++i) h = (h ^ p[i]) * 0x100000001b3ull;
-    return h;
-}
-
 static uint64_t hash_size(uint64_t h, size_t x)
 {
     uint64_t v = (uint64_t)x;
-    return hash_bytes(h, &v, sizeof v);
+    return fnv1a(h, &v, sizeof v);
 }
 
 static uint64_t tree_hash(const hairobb_bvh *bvh)
 {
-    uint64_t h = 0xcbf29ce484222325ull;
+    uint64_t h = FNV1A_START;
     const hairobb_stats *s = &bvh->stats;
     h = hash_size(h, bvh->node_bytes);
-    if (bvh->node_bytes) h = hash_bytes(h, bvh->nodes, bvh->node_bytes);
+    if (bvh->node_bytes) h = fnv1a(h, bvh->nodes, bvh->node_bytes);
     h = hash_size(h, bvh->leaf_prim_count);
-    h = hash_bytes(h, bvh->leaf_prims, bvh->leaf_prim_count * sizeof *bvh->leaf_prims);
-    h = hash_bytes(h, &bvh->root, sizeof bvh->root);
+    h = fnv1a(h, bvh->leaf_prims, bvh->leaf_prim_count * sizeof *bvh->leaf_prims);
+    h = fnv1a(h, &bvh->root, sizeof bvh->root);
     h = hash_size(h, s->aabb_nodes);
     h = hash_size(h, s->obb_nodes);
     h = hash_size(h, s->leaves);
@@ -112,8 +104,8 @@ static uint64_t tree_hash(const hairobb_bvh *bvh)
     h = hash_size(h, s->max_depth);
     h = hash_size(h, s->node_bytes);
     h = hash_size(h, s->leaf_bytes);
-    h = hash_bytes(h, bvh->lower, sizeof bvh->lower);
-    h = hash_bytes(h, bvh->upper, sizeof bvh->upper);
+    h = fnv1a(h, bvh->lower, sizeof bvh->lower);
+    h = fnv1a(h, bvh->upper, sizeof bvh->upper);
     return h;
 }
 
@@ -205,10 +197,10 @@ int main(int argc, char **argv)
                 hairobb_build_options opt;
                 hairobb_bvh *bvh = NULL;
                 hairobb_result r;
-                alloc_meter meter;
+                test_allocator meter;
                 snprintf(name, sizeof name, "%u", t);
                 if (!listed(threads, name)) continue;
-                alloc_meter_init(&meter, memory);
+                test_allocator_init_meter(&meter, memory);
                 memset(&opt, 0, sizeof opt);
                 option_sets[o].set(&opt);
                 opt.threads = t;
@@ -222,7 +214,7 @@ int main(int argc, char **argv)
                 } else if (memory) {
                     size_t k, bytes = hairobb_memory_bytes(bvh);
                     printf("%s\t%zu\t%s\t%u\t%.2f\t%.2f\t", s.name, s.segment_count, option_sets[o].name, t,
-                           (double)(meter.peak - bytes) / (double)s.segment_count, (double)bytes / (double)s.segment_count);
+                           (double)(meter.peak_bytes - bytes) / (double)s.segment_count, (double)bytes / (double)s.segment_count);
                     for (k = 0; k < meter.peak_blocks; ++k) printf("%s%zu", k ? " " : "", meter.peak_sizes[k]);
                     printf("\n");
                 } else {
@@ -230,12 +222,11 @@ int main(int argc, char **argv)
                 }
                 fflush(stdout);
                 hairobb_free(bvh);
-                if (meter.current != 0) {
+                if (meter.bytes != 0) {
                     printf("%s\t%s\t%u\t%zu bytes still allocated after hairobb_free\n", s.name, option_sets[o].name, t,
-                           meter.current);
+                           meter.bytes);
                     ++failures;
                 }
-                alloc_meter_destroy(&meter);
             }
             scene_motion_free(steps, time_steps);
         }

@@ -191,7 +191,7 @@ static int take_every_hit(void *user, const hairobb_ray *ray, const hairobb_hit 
    every build; BVHs built earlier stay live in it): a build's peak transient
    bytes = the meter's peak during the build - what was live before it - the
    BVH's hairobb_memory_bytes. */
-alloc_meter hairobb_meter;
+test_allocator hairobb_meter;
 
 /* hairobb_build over the scene's segments (vertices NULL: a moving scene's
    build_options->time_vertices), metered: build seconds and peak transient
@@ -201,12 +201,12 @@ hairobb_bvh *build_metered(const hair_scene *s, const float *vertices, hairobb_b
 {
     build_options->allocator_user = &hairobb_meter;
     hairobb_bvh *bvh = NULL;
-    alloc_meter_reset_peak(&hairobb_meter);
-    size_t live_before = hairobb_meter.current; /* no other thread allocates between builds */
+    test_allocator_reset_peak(&hairobb_meter);
+    size_t live_before = hairobb_meter.bytes; /* no other thread allocates between builds */
     double start = scene_now();
     hairobb_result result = hairobb_build(vertices, s->vertex_count, s->indices, s->segment_count, build_options, &bvh);
     *seconds = scene_now() - start;
-    *transient_bytes = bvh ? hairobb_meter.peak - live_before - hairobb_memory_bytes(bvh) : 0;
+    *transient_bytes = bvh ? hairobb_meter.peak_bytes - live_before - hairobb_memory_bytes(bvh) : 0;
     if (result != HAIROBB_OK)
         fprintf(stderr, "bench: %s: hairobb_build (%s): %s\n", s->name, what, hairobb_result_string(result));
     return bvh;

@@ -21,17 +21,10 @@
 #include <string.h>
 #define HAIROBB_IMPLEMENTATION
 #include "../hairobb.h"
+#include "compare.h"   /* fnv1a */
 #include "scenes.h"
 
 enum { SIDE = 64 };
-
-static uint64_t fnv(uint64_t h, const void *data, size_t bytes)
-{
-    const unsigned char *p = (const unsigned char *)data;
-    size_t i;
-    for (i = 0; i < bytes; ++i) h = (h ^ p[i]) * 1099511628211ull;
-    return h;
-}
 
 static void normalize(float v[3])
 {
@@ -64,7 +57,7 @@ static uint64_t hash_hits(const float *vertices, size_t vertex_count, const uint
                           uint64_t *tree_hash)
 {
     hairobb_bvh *bvh = NULL;
-    uint64_t h = 14695981039346656037ull;
+    uint64_t h = FNV1A_START;
     float centre[3], extent[3];
     size_t bytes;
     void *saved;
@@ -75,7 +68,7 @@ static uint64_t hash_hits(const float *vertices, size_t vertex_count, const uint
     /* the tree: its saved bytes */
     bytes = hairobb_save_size(bvh);
     saved = malloc(bytes);
-    if (saved && hairobb_save(bvh, saved, bytes) == HAIROBB_OK) *tree_hash = fnv(14695981039346656037ull, saved, bytes);
+    if (saved && hairobb_save(bvh, saved, bytes) == HAIROBB_OK) *tree_hash = fnv1a(FNV1A_START, saved, bytes);
     free(saved);
     for (k = 0; k < 3; ++k) {
         centre[k] = 0.5f * (lower[k] + upper[k]);
@@ -99,7 +92,7 @@ static uint64_t hash_hits(const float *vertices, size_t vertex_count, const uint
             memset(&hit, 0, sizeof hit);   /* a miss writes prim_id alone */
             memset(&next, 0, sizeof next);
             hairobb_intersect1(bvh, &ray, &hit);
-            h = fnv(h, &hit, sizeof hit);
+            h = fnv1a(h, &hit, sizeof hit);
             if (hit.prim_id == HAIROBB_INVALID_ID) continue;
             ++*hit_count;
             for (k = 0; k < 3; ++k) {
@@ -113,9 +106,9 @@ static uint64_t hash_hits(const float *vertices, size_t vertex_count, const uint
             shadow.tfar = bounce.tfar = INFINITY;
             shadow.time = bounce.time = 0.0f;
             occluded = hairobb_occluded1_from(bvh, &hit, &shadow);
-            h = fnv(h, &occluded, sizeof occluded);
+            h = fnv1a(h, &occluded, sizeof occluded);
             hairobb_intersect1_from(bvh, &hit, &bounce, &next);
-            h = fnv(h, &next, sizeof next);
+            h = fnv1a(h, &next, sizeof next);
         }
     hairobb_free(bvh);
     return h;

@@ -17,10 +17,11 @@
  *             whose basis is SCENE_BASIS_CATMULL_ROM (scene_yeti) the
  *             Catmull-Rom segment through 4 points shared along a strand.
  *
- * Contents: a seeded RNG, Catmull-Rom conversion of polyline strands,
+ * Contents: Catmull-Rom conversion of polyline strands,
  * procedural scenes (Yeti-class Catmull-Rom fur among them), loaders for Cem Yuksel's .hair files and Embree's
  * furBall_A model, a camera that frames a scene, a transform for stress tests
- * and a monotonic clock.
+ * and a monotonic clock. Its random numbers are random.h's scene_rng (PCG32),
+ * included here.
  */
 #ifndef HAIROBB_TESTS_SCENES_H
 #define HAIROBB_TESTS_SCENES_H
@@ -41,6 +42,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "random.h"    /* scene_rng: the generators' random numbers */
 #include "test_data.h" /* where furBall_A is installed */
 
 /* How a scene's segments read their 4 control points from indices[i] on;
@@ -60,41 +62,6 @@ typedef struct hair_scene {
     char name[64];
     scene_basis basis;
 } hair_scene;
-
-/* ------------------------------------------------------------------------ */
-/* Random numbers: PCG32 (O'Neill), so scenes are identical on every platform
-   for a given seed. The stream increment is fixed to keep the state one word. */
-
-typedef struct scene_rng { uint64_t state; } scene_rng;
-
-static inline uint32_t scene_rng_u32(scene_rng *rng)
-{
-    uint64_t old = rng->state;
-    rng->state = old * 6364136223846793005ULL + 1442695040888963407ULL;
-    uint32_t xorshifted = (uint32_t)(((old >> 18) ^ old) >> 27);
-    uint32_t rotation = (uint32_t)(old >> 59);
-    return (xorshifted >> rotation) | (xorshifted << ((32u - rotation) & 31u));
-}
-
-static inline void scene_rng_seed(scene_rng *rng, uint64_t seed)
-{
-    /* PCG's reference seeding: mixes the seed so that nearby seeds diverge. */
-    rng->state = 0;
-    scene_rng_u32(rng);
-    rng->state += seed;
-    scene_rng_u32(rng);
-}
-
-/* Uniform in [0, 1): 24 random bits, exactly representable as float. */
-static inline float scene_rng_float(scene_rng *rng)
-{
-    return (float)(scene_rng_u32(rng) >> 8) * (1.0f / 16777216.0f);
-}
-
-static inline float scene_rng_range(scene_rng *rng, float lo, float hi)
-{
-    return lo + (hi - lo) * scene_rng_float(rng);
-}
 
 /* ------------------------------------------------------------------------ */
 /* Small vector helpers for the generators. */

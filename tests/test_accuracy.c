@@ -7,6 +7,7 @@
 #define HAIROBB_IMPLEMENTATION
 #include "../hairobb.h"
 #include "check.h"
+#include "compare.h"
 #include "embree_wrap.h"
 #include "reference.h"
 #include "scenes.h"
@@ -17,39 +18,20 @@
 #define SIDE 256
 
 typedef struct accuracy {
-    size_t rays, disagreements, compared;
-    double *relative_errors;   /* |t - t_ref| / r_ref where both hit */
+    accuracy_tally tally;      /* against the reference (compare.h) */
     double seconds;
 } accuracy;
 
-static int compare_doubles(const void *a, const void *b)
+static void record(accuracy *a, const ref_hit *ref, int ref_hits, int hits, float t, float u, uint32_t prim)
 {
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
+    accuracy_tally_add(&a->tally, ref_hits, ref->t, ref->u, ref->prim_id, ref->r, hits, t, u, prim);
 }
 
-static double percentile(double *sorted, size_t n, double p)
+static void report(const char *scene, const char *who, accuracy *a, accuracy_summary *s)
 {
-    size_t i;
-    if (n == 0) return 0.0;
-    i = (size_t)(p * (double)(n - 1) + 0.5);
-    return sorted[i];
-}
-
-static void record(accuracy *a, const ref_hit *ref, int ref_hits, int hits, float t)
-{
-    if (ref_hits != hits) a->disagreements++;
-    else if (hits && ref->r > 0.0) a->relative_errors[a->compared++] = fabs((double)t - ref->t) / ref->r;
-}
-
-static void report(const char *scene, const char *who, accuracy *a, double *median, double *p99)
-{
-    qsort(a->relative_errors, a->compared, sizeof(double), compare_doubles);
-    *median = percentile(a->relative_errors, a->compared, 0.5);
-    *p99 = percentile(a->relative_errors, a->compared, 0.99);
+    accuracy_summarize(&a->tally, s);
     printf("%-12s %-16s disagree %6.3f%% (%4zu)  |dt|/r median %.2e p99 %.2e max %.2e  %6.2f Mrays/s\n", scene, who,
-           100.0 * (double)a->disagreements / (double)a->rays, a->disagreements, *median, *p99,
-           percentile(a->relative_errors, a->compared, 1.0), (double)a->rays / a->seconds * 1e-6);
+           disagreement_percent(s), s->disagreements, s->t_median, s->t_p99, s->t_max, (double)s->rays / a->seconds * 1e-6);
 }
 
 static void check_scene(hair_scene *s)
@@ -62,14 +44,16 @@ static void check_scene(hair_scene *s)
     hairobb_bvh *bvh = NULL;
     emb_scene *emb;
     ref_scene *rs;
+    accuracy_summary s_ours, s_emb;
     size_t emb_bytes = 0, hit_count = 0;
-    double emb_build_seconds = 0.0, t0, m_ours, p_ours, m_emb, p_emb;
+    double emb_build_seconds = 0.0, t0;
 
     memset(&ours, 0, sizeof ours);
     memset(&embree, 0, sizeof embree);
-    ours.rays = embree.rays = n;
-    ours.relative_errors = (double *)malloc(sizeof(double) * n);
-    embree.relative_errors = (double *)malloc(sizeof(double) * n);
+    if (accuracy_tally_init(&ours.tally, n) != 0 || accuracy_tally_init(&embree.tally, n) != 0) {
+        CHECK(0, "%s: no memory for the errors", s->name);
+        return;
+    }
     scene_camera_rays(s, SIDE, SIDE, org, dir);
 
     rs = ref_build(s->vertices, s->vertex_count, s->indices, s->segment_count);
@@ -95,7 +79,7 @@ static void check_scene(hair_scene *s)
         ray.tnear = 0.0f;
         ray.tfar = INFINITY;
         hits = hairobb_intersect1(bvh, &ray, &hit);
-        record(&ours, &ref[i], ref_hits[i], hits, hit.t);
+        record(&ours, &ref[i], ref_hits[i], hits, hit.t, hit.u, hit.prim_id);
     }
     ours.seconds = scene_now() - t0;
 
@@ -104,11 +88,11 @@ static void check_scene(hair_scene *s)
     if (!emb) return;
     t0 = scene_now();
     for (i = 0; i < n; ++i) {
-        float t = 0.0f, u, v;
-        uint32_t prim;
+        float t = 0.0f, u = 0.0f, v;
+        uint32_t prim = 0;
         int hits;
         hits = emb_intersect(emb, org + 3 * i, 0.0f, dir + 3 * i, INFINITY, &t, &u, &v, &prim);
-        record(&embree, &ref[i], ref_hits[i], hits, t);
+        record(&embree, &ref[i], ref_hits[i], hits, t, u, prim);
     }
     embree.seconds = scene_now() - t0;
     emb_free(emb);
@@ -116,16 +100,16 @@ static void check_scene(hair_scene *s)
     printf("%-12s %zu segments, %zu of %zu rays hit; hairobb %.1f bytes/segment, Embree %.1f\n", s->name,
            s->segment_count, hit_count, n, (double)hairobb_memory_bytes(bvh) / (double)s->segment_count,
            (double)emb_bytes / (double)s->segment_count);
-    report(s->name, "hairobb", &ours, &m_ours, &p_ours);
-    report(s->name, "embree flat r4", &embree, &m_emb, &p_emb);
-    CHECK(ours.disagreements <= embree.disagreements, "%s: hairobb disagrees on %zu rays, Embree on %zu", s->name,
-          ours.disagreements, embree.disagreements);
-    CHECK(p_ours <= p_emb, "%s: hairobb |dt|/r p99 %g, Embree %g", s->name, p_ours, p_emb);
-    CHECK(ours.compared > n / 20, "%s: %zu hits compared", s->name, ours.compared);
+    report(s->name, "hairobb", &ours, &s_ours);
+    report(s->name, "embree flat r4", &embree, &s_emb);
+    CHECK(s_ours.disagreements <= s_emb.disagreements, "%s: hairobb disagrees on %zu rays, Embree on %zu", s->name,
+          s_ours.disagreements, s_emb.disagreements);
+    CHECK(s_ours.t_p99 <= s_emb.t_p99, "%s: hairobb |dt|/r p99 %g, Embree %g", s->name, s_ours.t_p99, s_emb.t_p99);
+    CHECK(s_ours.t_compared > n / 20, "%s: %zu hits compared", s->name, s_ours.t_compared);
 
     hairobb_free(bvh);
-    free(ours.relative_errors);
-    free(embree.relative_errors);
+    accuracy_tally_free(&ours.tally);
+    accuracy_tally_free(&embree.tally);
     free(org);
     free(dir);
     free(ref);

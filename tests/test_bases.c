@@ -12,6 +12,7 @@
 #define HAIROBB_IMPLEMENTATION
 #include "../hairobb.h"
 #include "check.h"
+#include "compare.h"
 #include "embree_wrap.h"
 #include "reference.h"
 #include "ref_bases.h"
@@ -177,12 +178,6 @@ static void check_basis(hairobb_basis basis, const strands *st)
     free(dir);
 }
 
-/* 1 if two hits are the same bits (t, u, v, Ng, tangent, prim). */
-static int same_hit(int got_a, const hairobb_hit *a, int got_b, const hairobb_hit *b)
-{
-    return got_a == got_b && (!got_a || memcmp(a, b, sizeof *a) == 0);
-}
-
 /* Hits of a and b over camera rays and rays in random directions: the
    number that differ in any bit. */
 static size_t hit_differences(const hairobb_bvh *a, const hairobb_bvh *b, const float *org, const float *dir, size_t rays)
@@ -197,10 +192,8 @@ static size_t hit_differences(const hairobb_bvh *a, const hairobb_bvh *b, const 
             for (k = 0; k < 3; ++k) { ray.org[k] = org[3 * i + k]; ray.dir[k] = dir[3 * i + k]; }
         } else {   /* from inside the hair, any direction */
             for (k = 0; k < 3; ++k) {
-                seed = seed * 1664525u + 1013904223u;
-                ray.dir[k] = (float)(seed >> 8) / 16777216.0f - 0.5f;
-                seed = seed * 1664525u + 1013904223u;
-                ray.org[k] = ((float)(seed >> 8) / 16777216.0f - 0.5f) * (k == 2 ? 2.0f : 1.0f) + (k == 2 ? 1.0f : 0.0f);
+                ray.dir[k] = lcg32_float(&seed) - 0.5f;
+                ray.org[k] = (lcg32_float(&seed) - 0.5f) * (k == 2 ? 2.0f : 1.0f) + (k == 2 ? 1.0f : 0.0f);
             }
         }
         ray.tnear = 0.0f;
@@ -347,7 +340,7 @@ static void check_yeti(void)
     scene_camera_rays(&yeti, SIDE, SIDE, org, dir);
     scene_rng_seed(&rng, 17);
     for (i = camera; i < rays; ++i) {
-        size_t segment = (size_t)(((uint64_t)scene_rng_u32(&rng) * yeti.segment_count) >> 32);
+        size_t segment = scene_rng_below(&rng, (uint32_t)yeti.segment_count);
         scene_ray_near_segment(bezier.vertices + 16 * segment, &rng, org + 3 * i, dir + 3 * i);
     }
     for (i = 0; i < rays; ++i) {

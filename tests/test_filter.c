@@ -129,7 +129,7 @@ static void test_each_crossing_once(const char *name, const hair_scene *s, const
             double u, w, b0, b1, b2, b3, d0, d1, d2, d3, P[3], T[3], side[3], tt = 0.0, along = 0.0;
             const float *cp;
             int k;
-            state = state * 6364136223846793005ull + 1442695040888963407ull;
+            lcg64_next(&state);
             prim = (size_t)(state >> 33) % s->segment_count;
             u = (double)((state >> 20) % 9) / 8.0;
             cp = s->vertices + 4 * (size_t)s->indices[prim];

@@ -7,6 +7,7 @@
 #include "../hairobb.h"
 #include "test_data.h"
 #include "check.h"
+#include "random.h"
 #include "reference.h"
 #include "ref_bases.h"
 #include <math.h>
@@ -20,7 +21,7 @@
 #define NS (STRANDS * STRANDS * SEGS)
 
 static uint32_t rng_state = 12345u;
-static float rnd(void) { rng_state = rng_state * 1664525u + 1013904223u; return (float)(rng_state >> 8) / 16777216.0f; }
+static float rnd(void) { return lcg32_float(&rng_state); }
 
 /* step k of T: strands on a grid, bent; rotate: each strand swept about its root's z axis; else translated along x */
 static void make_step(float *v, uint32_t *idx, int k, int T, int rotate)

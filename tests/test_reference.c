@@ -7,6 +7,7 @@
  * and translated to 1e5. Prints one line per check, then "N passed, M failed, 0 skipped".
  */
 #include "check.h"
+#include "random.h"
 #include "reference.h"
 #include "ref_tube.h"
 
@@ -339,13 +340,7 @@ static void test_degenerate(void)
 
 static uint64_t g_rng = 0x9e3779b97f4a7c15ull;
 
-static double rnd(void) /* [0,1) */
-{
-    g_rng ^= g_rng << 13;
-    g_rng ^= g_rng >> 7;
-    g_rng ^= g_rng << 17;
-    return (double)(g_rng >> 11) * (1.0 / 9007199254740992.0);
-}
+static double rnd(void) { return xorshift64_double(&g_rng); } /* [0,1) */
 
 static double rnd_range(double lo, double hi)
 {

@@ -22,6 +22,7 @@ static int instrument;
 #define HAIROBB_IMPLEMENTATION
 #include "../hairobb.h"
 #include "check.h"
+#include "compare.h"
 #include "reference.h"
 #include "scenes.h"
 
@@ -101,8 +102,7 @@ static int differing_hits(const hairobb_bvh *a, const hairobb_bvh *b, const floa
         hairobb_hit ha, hb;
         int got_a = hairobb_intersect1(a, &ray, &ha), got_b = hairobb_intersect1(b, &ray, &hb);
         *hits += got_a;
-        differ += got_a != got_b || (got_a && memcmp(&ha, &hb, sizeof ha) != 0) ||
-                  hairobb_occluded1(a, &ray) != hairobb_occluded1(b, &ray);
+        differ += !same_hit(got_a, &ha, got_b, &hb) || hairobb_occluded1(a, &ray) != hairobb_occluded1(b, &ray);
     }
     return differ;
 }

@@ -33,6 +33,7 @@
 #define HAIROBB_IMPLEMENTATION
 #include "../hairobb.h"
 #include "check.h"
+#include "compare.h"
 #include "embree_wrap.h"
 #include "ref_tube.h"
 #include "scenes.h"
@@ -45,17 +46,11 @@
 
 static float dot3f(const float a[3], const float b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
-static int compare_doubles(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
 static void compare_with_embree(const char *name, hair_scene *s)
 {
     size_t n = (size_t)SIDE * SIDE, i, both = 0, holes = 0, extra = 0, exits = 0, open_ends = 0;
     float *org = (float *)malloc(3 * sizeof(float) * n), *dir = (float *)malloc(3 * sizeof(float) * n);
-    double *error = (double *)malloc(sizeof(double) * n);
+    double *error = (double *)malloc(sizeof(double) * n), median, p99;
     ref_scene *reference_scene = ref_build(s->vertices, s->vertex_count, s->indices, s->segment_count);
     emb_scene *e = emb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, EMB_ROUND_BEZIER, 0, 0, NULL, NULL);
     CHECK(e != NULL && reference_scene != NULL, "%s: Embree builds its round curves", name);
@@ -82,16 +77,15 @@ static void compare_with_embree(const char *name, hair_scene *s)
         }
     }
     qsort(error, both, sizeof *error, compare_doubles);
+    median = percentile(error, both, 0.5);
+    p99 = percentile(error, both, 0.99);
     printf("%s: %zu segments, %zu rays; both hit %zu; Embree misses %zu the reference hits, hits %zu it misses; "
            "|dt|/r median %.3g, p99 %.3g, max %.3g\n",
-           name, s->segment_count, n, both, holes, extra, both ? error[both / 2] : 0.0,
-           both ? error[(size_t)(0.99 * (double)(both - 1))] : 0.0, both ? error[both - 1] : 0.0);
+           name, s->segment_count, n, both, holes, extra, median, p99, percentile(error, both, 1.0));
     CHECK(both > n / 20, "%s: %zu rays hit both", name, both);
     /* the same surface: disagreements are Embree's rare misses and edge rays */
     CHECK(holes + extra <= n / 200, "%s: %zu + %zu of %zu rays disagree with Embree on hit or miss", name, holes, extra, n);
-    CHECK(both && error[both / 2] <= 1e-4 && error[(size_t)(0.99 * (double)(both - 1))] <= 1e-2,
-          "%s: |dt|/r against Embree: median %.3g, p99 %.3g", name, both ? error[both / 2] : 0.0,
-          both ? error[(size_t)(0.99 * (double)(both - 1))] : 0.0);
+    CHECK(median <= 1e-4 && p99 <= 1e-2, "%s: |dt|/r against Embree: median %.3g, p99 %.3g", name, median, p99);
     printf("%s: %zu rays came in through a strand's open end and first met an exit sheet\n", name, open_ends);
     CHECK(exits == 0, "%s: %zu camera rays meet an exit sheet first away from a strand's ends", name, exits);
     emb_free(e);
@@ -129,7 +123,7 @@ static void compare_with_reference(const char *name, hair_scene *s, const hairob
 {
     size_t n = (size_t)SIDE * SIDE, i, both = 0, disagree = 0, at_edge = 0, inward = 0, inward_bad = 0, outward = 0, outward_self = 0, v_bad = 0;
     float *org = (float *)malloc(3 * sizeof(float) * n), *dir = (float *)malloc(3 * sizeof(float) * n);
-    double *error = (double *)malloc(sizeof(double) * n), worst_inward = 0.0;
+    double *error = (double *)malloc(sizeof(double) * n), worst_inward = 0.0, p99;
     ref_scene *reference_scene = ref_build(s->vertices, s->vertex_count, s->indices, s->segment_count);
     hairobb_bvh *bvh = NULL;
     CHECK(hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, options, &bvh) == HAIROBB_OK,
@@ -214,16 +208,16 @@ static void compare_with_reference(const char *name, hair_scene *s, const hairob
         }
     }
     qsort(error, both, sizeof *error, compare_doubles);
+    p99 = percentile(error, both, 0.99);
     printf("%s: hairobb's tubes against the reference: %zu of %zu rays disagree on hit or miss (%zu more within 1e-3 r of a "
            "silhouette); |dt|/r median %.3g, p99 %.3g, max %.3g over %zu hits; into the fibre %zu rays, %zu without its far side "
            "(worst |dt|/r %.3g); reflected %zu, %zu back on their tube\n",
-           name, disagree, n, at_edge, both ? error[both / 2] : 0.0, both ? error[(size_t)(0.99 * (double)(both - 1))] : 0.0,
-           both ? error[both - 1] : 0.0, both, inward, inward_bad, worst_inward, outward, outward_self);
+           name, disagree, n, at_edge, percentile(error, both, 0.5), p99, percentile(error, both, 1.0), both, inward, inward_bad,
+           worst_inward, outward, outward_self);
     CHECK(both > n / 20, "%s: %zu hits", name, both);
     CHECK(disagree == 0 && at_edge <= n / 2000, "%s: %zu of %zu rays disagree with the tube reference (%zu at a silhouette)", name,
           disagree, n, at_edge);
-    CHECK(both && error[(size_t)(0.99 * (double)(both - 1))] <= 2e-3, "%s: |dt|/r p99 %.3g", name,
-          both ? error[(size_t)(0.99 * (double)(both - 1))] : 0.0);
+    CHECK(p99 <= 2e-3, "%s: |dt|/r p99 %.3g", name, p99);
     CHECK(v_bad <= both / 1000, "%s: v off the reference's on %zu hits", name, v_bad);
     CHECK(inward > 100 && inward_bad <= inward / 1000, "%s: %zu of %zu rays into the fibre miss its far side", name, inward_bad, inward);
     CHECK(outward_self == 0, "%s: %zu reflected rays hit their own tube again", name, outward_self);
@@ -260,8 +254,8 @@ static void test_save_refit(hair_scene *s)
         hairobb_hit a, b, c;
         int ga = hairobb_intersect1(bvh, &ray, &a), gb = hairobb_intersect1(loaded, &ray, &b), gc = hairobb_intersect1(refitted, &ray, &c);
         hits += (size_t)ga;
-        differ += ga != gb || (ga && memcmp(&a, &b, sizeof a) != 0);
-        refit_differ += ga != gc || (ga && memcmp(&a, &c, sizeof a) != 0);
+        differ += !same_hit(ga, &a, gb, &b);
+        refit_differ += !same_hit(ga, &a, gc, &c);
     }
     CHECK(hits > n / 20 && differ == 0, "save: a loaded round BVH gives the same hits (%zu of %zu differ, %zu hits)", differ, n, hits);
     CHECK(refit_differ == 0, "refit: a refitted round BVH gives the same hits (%zu differ)", refit_differ);
@@ -441,36 +435,35 @@ static void test_stress(void)
     size_t i;
     int k;
     uint64_t state = 12345;
-#define STRESS_RANDOM() ((double)((state = state * 6364136223846793005ull + 1442695040888963407ull) >> 11) * 0x1p-53)
     /* perpendicular to the fibre, at offsets r (1 - 10^-k) from its axis, k = 1..6, both sides */
     stress_straight(v, 3.0, 0.25, 0.25, 0.0);
     for (i = 0; i < RAYS; ++i) {
         double e = 0.25 * (1.0 - pow(10.0, -(double)(1 + i % 6))) * (i & 1 ? 1.0 : -1.0);
-        org[i][0] = (float)(0.2 + 2.6 * STRESS_RANDOM()); org[i][1] = (float)e; org[i][2] = -2.0f;
+        org[i][0] = (float)(0.2 + 2.6 * lcg64_double(&state)); org[i][1] = (float)e; org[i][2] = -2.0f;
         dir[i][0] = 0.0f; dir[i][1] = 0.0f; dir[i][2] = 1.0f;
     }
     stress_case("perpendicular, grazing at r (1 - 10^-k)", v, 4, idx, 1, (const float (*)[3])org, (const float (*)[3])dir, RAYS, 1);
     /* oblique rays through a tapered fibre whose radius falls to 0 */
     stress_straight(v, 3.0, 0.3, 0.0, 0.0);
     for (i = 0; i < RAYS; ++i) {
-        double x = 3.0 * STRESS_RANDOM(), a = 6.283185307 * STRESS_RANDOM();
+        double x = 3.0 * lcg64_double(&state), a = 6.283185307 * lcg64_double(&state);
         org[i][0] = (float)(x - 1.0); org[i][1] = (float)(2.0 * cos(a)); org[i][2] = (float)(2.0 * sin(a));
-        dir[i][0] = 1.0f; dir[i][1] = (float)(-2.0 * cos(a) + 0.3 * (STRESS_RANDOM() - 0.5)); dir[i][2] = (float)(-2.0 * sin(a) + 0.3 * (STRESS_RANDOM() - 0.5));
+        dir[i][0] = 1.0f; dir[i][1] = (float)(-2.0 * cos(a) + 0.3 * (lcg64_double(&state) - 0.5)); dir[i][2] = (float)(-2.0 * sin(a) + 0.3 * (lcg64_double(&state) - 0.5));
     }
     stress_case("tapered to r = 0", v, 4, idx, 1, (const float (*)[3])org, (const float (*)[3])dir, RAYS, 1);
     /* a long thin fibre far from the origin (length / width 10^4, at 10^4) */
     stress_straight(v, 10.0, 5e-4, 5e-4, 1e4);
     for (i = 0; i < RAYS; ++i) {
-        org[i][0] = (float)(1e4 + 0.5 + 9.0 * STRESS_RANDOM()); org[i][1] = (float)(1e4 + 5e-4 * (2.0 * STRESS_RANDOM() - 1.0));
+        org[i][0] = (float)(1e4 + 0.5 + 9.0 * lcg64_double(&state)); org[i][1] = (float)(1e4 + 5e-4 * (2.0 * lcg64_double(&state) - 1.0));
         org[i][2] = (float)(1e4 - 1.0);
-        dir[i][0] = (float)(0.2 * (STRESS_RANDOM() - 0.5)); dir[i][1] = 0.0f; dir[i][2] = 1.0f;
+        dir[i][0] = (float)(0.2 * (lcg64_double(&state) - 0.5)); dir[i][1] = 0.0f; dir[i][2] = 1.0f;
     }
     stress_case("long and thin at 1e4", v, 4, idx, 1, (const float (*)[3])org, (const float (*)[3])dir, RAYS, 1);
     /* a short fat segment (length 0.2, radius 0.3), rays every way */
     stress_straight(v, 0.2, 0.3, 0.25, 0.0);
     for (i = 0; i < RAYS; ++i) {
-        for (k = 0; k < 3; ++k) org[i][k] = (float)(4.0 * STRESS_RANDOM() - 2.0);
-        for (k = 0; k < 3; ++k) dir[i][k] = (float)((k == 0 ? 0.1 : 0.0) + 0.4 * STRESS_RANDOM() - 0.2 - org[i][k]);
+        for (k = 0; k < 3; ++k) org[i][k] = (float)(4.0 * lcg64_double(&state) - 2.0);
+        for (k = 0; k < 3; ++k) dir[i][k] = (float)((k == 0 ? 0.1 : 0.0) + 0.4 * lcg64_double(&state) - 0.2 - org[i][k]);
     }
     stress_case("short and fat", v, 4, idx, 1, (const float (*)[3])org, (const float (*)[3])dir, RAYS, 0);
     /* a strongly bent segment, and rays from inside it along its tangent */
@@ -478,11 +471,11 @@ static void test_stress(void)
         static const float bent[16] = {0.0f, 0.0f, 0.0f, 0.15f, 1.0f, 1.2f, 0.0f, 0.15f, 0.0f, 1.4f, 0.1f, 0.15f, 1.0f, 2.0f, 0.0f, 0.15f};
         memcpy(v, bent, sizeof bent);
         for (i = 0; i < RAYS; ++i) {
-            double u = 0.05 + 0.9 * STRESS_RANDOM(), s = 1.0 - u, c[3], d[3];
+            double u = 0.05 + 0.9 * lcg64_double(&state), s = 1.0 - u, c[3], d[3];
             for (k = 0; k < 3; ++k) {
                 c[k] = s * s * s * bent[k] + 3 * u * s * s * bent[4 + k] + 3 * u * u * s * bent[8 + k] + u * u * u * bent[12 + k];
                 d[k] = 3 * (s * s * (bent[4 + k] - bent[k]) + 2 * u * s * (bent[8 + k] - bent[4 + k]) + u * u * (bent[12 + k] - bent[8 + k]));
-                org[i][k] = (float)(c[k] + 0.05 * (STRESS_RANDOM() - 0.5));
+                org[i][k] = (float)(c[k] + 0.05 * (lcg64_double(&state) - 0.5));
                 dir[i][k] = (float)(i & 1 ? d[k] : -d[k]);
             }
         }
@@ -494,8 +487,8 @@ static void test_stress(void)
                                        1, 0.3f, 0, 0.1f, 1, 0.6f, 0, 0.1f, 1, 1, 0, 0.1f};
         uint32_t two[2] = {0, 3};
         for (i = 0; i < RAYS; ++i) {
-            org[i][0] = (float)(0.8 + 0.4 * STRESS_RANDOM()); org[i][1] = (float)(-0.2 + 0.4 * STRESS_RANDOM()); org[i][2] = -3.0f;
-            dir[i][0] = (float)(0.2 * (STRESS_RANDOM() - 0.5)); dir[i][1] = (float)(0.2 * (STRESS_RANDOM() - 0.5)); dir[i][2] = 1.0f;
+            org[i][0] = (float)(0.8 + 0.4 * lcg64_double(&state)); org[i][1] = (float)(-0.2 + 0.4 * lcg64_double(&state)); org[i][2] = -3.0f;
+            dir[i][0] = (float)(0.2 * (lcg64_double(&state) - 0.5)); dir[i][1] = (float)(0.2 * (lcg64_double(&state) - 0.5)); dir[i][2] = 1.0f;
         }
         stress_case("a Bezier kink", kink, 7, two, 2, (const float (*)[3])org, (const float (*)[3])dir, RAYS, 1);
         {
@@ -504,29 +497,23 @@ static void test_stress(void)
                every circle's plane, and at the repeated end, where the
                tangent vanishes, float noise decides (left open) */
             for (i = 0; i < RAYS; ++i) {
-                org[i][0] = (float)(1.2 * STRESS_RANDOM() - 0.1); org[i][1] = (float)(0.7 * STRESS_RANDOM() - 0.1); org[i][2] = -3.0f;
-                dir[i][0] = (float)(0.3 * (STRESS_RANDOM() - 0.5)); dir[i][1] = (float)(0.3 * (STRESS_RANDOM() - 0.5)); dir[i][2] = 1.0f;
+                org[i][0] = (float)(1.2 * lcg64_double(&state) - 0.1); org[i][1] = (float)(0.7 * lcg64_double(&state) - 0.1); org[i][2] = -3.0f;
+                dir[i][0] = (float)(0.3 * (lcg64_double(&state) - 0.5)); dir[i][1] = (float)(0.3 * (lcg64_double(&state) - 0.5)); dir[i][2] = 1.0f;
             }
             stress_case("repeated control points", repeated, 4, idx, 1, (const float (*)[3])org, (const float (*)[3])dir, RAYS, 0);
         }
     }
-#undef STRESS_RANDOM
 }
 
 /* ---- The stress suite's second part: a tube that meets itself, smooth
    joints of B-spline and Catmull-Rom strands, very curvy segments, motion,
    and secondary rays at joints. Rays are aimed near the hair from random
-   directions (a random generator per check, the same LCG as above). */
-static double stress_random(uint64_t *state)
-{
-    *state = *state * 6364136223846793005ull + 1442695040888963407ull;
-    return (double)(*state >> 11) * 0x1p-53;
-}
+   directions (a random generator per check: random.h's lcg64, as above). */
 
 /* a unit direction, uniform on the sphere */
 static void stress_direction(uint64_t *state, double d[3])
 {
-    double z = 2.0 * stress_random(state) - 1.0, a = 6.283185307179586 * stress_random(state), s = sqrt(1.0 - z * z);
+    double z = 2.0 * lcg64_double(state) - 1.0, a = 6.283185307179586 * lcg64_double(state), s = sqrt(1.0 - z * z);
     d[0] = s * cos(a);
     d[1] = s * sin(a);
     d[2] = z;
@@ -537,7 +524,7 @@ static void stress_ball(uint64_t *state, double radius, double out[3])
 {
     int k;
     do {
-        for (k = 0; k < 3; ++k) out[k] = 2.0 * stress_random(state) - 1.0;
+        for (k = 0; k < 3; ++k) out[k] = 2.0 * lcg64_double(state) - 1.0;
     } while (out[0] * out[0] + out[1] * out[1] + out[2] * out[2] > 1.0);
     for (k = 0; k < 3; ++k) out[k] *= radius;
 }
@@ -563,7 +550,7 @@ static void stress_bezier(const float *cp, double u, double centre[3], double *r
    |dir| random in [0.5, 2]. */
 static void stress_aimed(uint64_t *state, const double aim[3], double distance, float org[3], float dir[3])
 {
-    double d[3], scale = 0.5 + 1.5 * stress_random(state);
+    double d[3], scale = 0.5 + 1.5 * lcg64_double(state);
     int k;
     stress_direction(state, d);
     for (k = 0; k < 3; ++k) {
@@ -579,7 +566,7 @@ static void stress_segment_rays(hairobb_bvh *bvh, const ref_scene *reference, co
 {
     size_t i;
     for (i = 0; i < rays; ++i) {
-        double u = u0 + (u1 - u0) * stress_random(state), aim[3], offset[3], radius;
+        double u = u0 + (u1 - u0) * lcg64_double(state), aim[3], offset[3], radius;
         float org[3], dir[3];
         int k;
         stress_bezier(cp, u, aim, &radius, NULL, NULL);
@@ -715,8 +702,8 @@ static void test_stress_curvy(void)
             float org[3], dir[3];
             int k;
             for (k = 0; k < 3; ++k) {
-                org[k] = (float)(3.0 * stress_random(&state) - 1.0);
-                dir[k] = (float)(1.2 * stress_random(&state) - 0.1 - org[k]);
+                org[k] = (float)(3.0 * lcg64_double(&state) - 1.0);
+                dir[k] = (float)(1.2 * lcg64_double(&state) - 0.1 - org[k]);
             }
             stress_ray(bvh, reference, org, dir, 0.0f, &n);
         }
@@ -849,7 +836,7 @@ static void test_stress_joints(void)
             CHECK(memcmp(cp + 12, next, 16) == 0, "stress %s: segment %zu ends where the next begins", n.name, i);
             stress_seam(cp, joint, &radius, tangent, n1, n2);
             for (r = 0; r < RAYS_PER_JOINT; ++r) {
-                double aim[3], a = 6.283185307179586 * stress_random(&state), outward[3], d[3];
+                double aim[3], a = 6.283185307179586 * lcg64_double(&state), outward[3], d[3];
                 float org[3], dir[3];
                 int kind = (int)(r % 4);
                 for (k = 0; k < 3; ++k) {
@@ -863,14 +850,14 @@ static void test_stress_joints(void)
                 } else if (kind == 1) {   /* at the seam, any direction */
                     stress_aimed(&state, aim, 2.0, org, dir);
                 } else if (kind == 2) {   /* at the seam from outside, 10 to 60 degrees to the fibre, either way along it */
-                    double angle = (10.0 + 50.0 * stress_random(&state)) * 3.141592653589793 / 180.0, along = r & 4 ? 1.0 : -1.0;
+                    double angle = (10.0 + 50.0 * lcg64_double(&state)) * 3.141592653589793 / 180.0, along = r & 4 ? 1.0 : -1.0;
                     for (k = 0; k < 3; ++k) {
                         d[k] = along * cos(angle) * tangent[k] - sin(angle) * outward[k];
                         org[k] = (float)(aim[k] - 1.0 * d[k]);
                         dir[k] = (float)d[k];
                     }
                 } else {   /* from the axis inside, out through the seam */
-                    double back = (r & 4 ? 1.0 : -1.0) * radius * (0.2 + 1.5 * stress_random(&state));
+                    double back = (r & 4 ? 1.0 : -1.0) * radius * (0.2 + 1.5 * lcg64_double(&state));
                     for (k = 0; k < 3; ++k) {
                         org[k] = (float)(joint[k] + back * tangent[k]);
                         dir[k] = (float)(aim[k] - (double)org[k]);
@@ -948,8 +935,8 @@ static void test_stress_motion(void)
         reference = ref_build(lerped, vertex_count, indices, segments);
         CHECK(reference != NULL, "stress %s: the reference at time %g builds", n.name, (double)times[t]);
         for (i = 0; reference && i < RAYS_PER_TIME; ++i) {
-            size_t prim = (size_t)(stress_random(&state) * (double)segments);
-            double u = stress_random(&state), aim[3], offset[3], radius;
+            size_t prim = (size_t)(lcg64_double(&state) * (double)segments);
+            double u = lcg64_double(&state), aim[3], offset[3], radius;
             float org[3], dir[3];
             ref_tube_hit now, then;
             int k, hit_now, hit_then;
@@ -1020,10 +1007,10 @@ static void test_stress_secondary_at_joints(void)
                 for (k = 0; k < 3; ++k) aim[k] = joint[k] + offset[k];
                 stress_aimed(&state, aim, 2.0, ray.org, ray.dir);
             } else if (r % 3 == 1) {   /* shallow: at 5-30 degrees to the fibre, passing r (1 - delta) from its axis */
-                double a = 6.283185307179586 * stress_random(&state), e[3], f[3], closest[3];
-                double angle = (5.0 + 25.0 * stress_random(&state)) * 3.141592653589793 / 180.0;
-                double delta = 2e-3 * pow(25.0, stress_random(&state)), along = (stress_random(&state) - 0.5) * radius;
-                double sense = stress_random(&state) < 0.5 ? -1.0 : 1.0;
+                double a = 6.283185307179586 * lcg64_double(&state), e[3], f[3], closest[3];
+                double angle = (5.0 + 25.0 * lcg64_double(&state)) * 3.141592653589793 / 180.0;
+                double delta = 2e-3 * pow(25.0, lcg64_double(&state)), along = (lcg64_double(&state) - 0.5) * radius;
+                double sense = lcg64_double(&state) < 0.5 ? -1.0 : 1.0;
                 for (k = 0; k < 3; ++k) e[k] = cos(a) * n1[k] + sin(a) * n2[k];
                 ref__cross3(tangent, e, f);
                 for (k = 0; k < 3; ++k) {
@@ -1033,7 +1020,7 @@ static void test_stress_secondary_at_joints(void)
                     ray.dir[k] = (float)d;
                 }
             } else {   /* into the seam from outside */
-                double a = 6.283185307179586 * stress_random(&state), outward[3], d[3], scale = 0.5 + 1.5 * stress_random(&state), flip;
+                double a = 6.283185307179586 * lcg64_double(&state), outward[3], d[3], scale = 0.5 + 1.5 * lcg64_double(&state), flip;
                 for (k = 0; k < 3; ++k) outward[k] = cos(a) * n1[k] + sin(a) * n2[k];
                 do stress_direction(&state, d); while (fabs(ref__dot3(d, outward)) < 0.03);   /* not within 1.7 degrees of grazing */
                 flip = ref__dot3(d, outward) > 0.0 ? -1.0 : 1.0;
@@ -1191,7 +1178,6 @@ static void test_caps_and_back_faces(void)
     size_t segments = CAP_STRANDS * CAP_SEGMENTS, i;
     int strand, k, mode;
     uint64_t state = 777;
-#define CAP_RANDOM() ((double)((state = state * 6364136223846793005ull + 1442695040888963407ull) >> 11) * 0x1p-53)
     for (strand = 0; strand < CAP_STRANDS; ++strand) {
         float joint[CAP_SEGMENTS + 1][4], handle[CAP_SEGMENTS + 1][3];
         int j;
@@ -1256,7 +1242,7 @@ static void test_caps_and_back_faces(void)
                     double dir_length;
                     hairobb_hit hit;
                     for (k = 0; k < 3; ++k) {
-                        double jitter = 2.0 * CAP_RANDOM() - 1.0, wobble = 2.0 * CAP_RANDOM() - 1.0;
+                        double jitter = 2.0 * lcg64_double(&state) - 1.0, wobble = 2.0 * lcg64_double(&state) - 1.0;
                         if (kind == 0) {          /* into the end from outside, nearly along the strand */
                             org[k] = (float)(E[k] + 0.5 * T[k] + 1.3 * r * jitter);
                             dir[k] = (float)(-T[k] + 0.25 * wobble);
@@ -1324,8 +1310,8 @@ static void test_caps_and_back_faces(void)
                 hairobb_hit a, b;
                 int ga, gb;
                 for (k = 0; k < 3; ++k) {
-                    double aim = (k == 0 ? 1.2 : k == 1 ? 2.0 : 0.0) * CAP_RANDOM();
-                    ray.org[k] = (float)(4.0 * CAP_RANDOM() - 2.0 + (k == 1 ? 1.0 : 0.0));
+                    double aim = (k == 0 ? 1.2 : k == 1 ? 2.0 : 0.0) * lcg64_double(&state);
+                    ray.org[k] = (float)(4.0 * lcg64_double(&state) - 2.0 + (k == 1 ? 1.0 : 0.0));
                     ray.dir[k] = (float)(aim - ray.org[k]);
                 }
                 ray.tnear = 0.0f;
@@ -1333,7 +1319,7 @@ static void test_caps_and_back_faces(void)
                 ray.time = 0.0f;
                 ga = hairobb_intersect1(bvh, &ray, &a);
                 gb = hairobb_intersect1(loaded, &ray, &b);
-                differ += ga != gb || (ga && memcmp(&a, &b, sizeof a) != 0);
+                differ += !same_hit(ga, &a, gb, &b);
             }
             CHECK(loaded && differ == 0, "caps %d: the loaded BVH gives the same hits (%zu differ)", mode, differ);
             hairobb_free(loaded);
@@ -1364,7 +1350,7 @@ static void test_caps_and_back_faces(void)
         CHECK(hairobb_build(bs, 9, bidx, 6, &o, &bvh) == HAIROBB_OK, "caps: a B-spline strand builds");
         for (i = 0; bvh && i < 200; ++i) {
             /* the strand's point at knot 1 + s (a joint of segments, or between), and the chord's direction */
-            double s = 0.05 + 5.9 * CAP_RANDOM(), u = s - floor(s), b[4], c[3] = {0, 0, 0}, d[3] = {0, 0, 0};
+            double s = 0.05 + 5.9 * lcg64_double(&state), u = s - floor(s), b[4], c[3] = {0, 0, 0}, d[3] = {0, 0, 0};
             size_t first = (size_t)s;
             hairobb_ray ray;
             hairobb_hit hit;
@@ -1394,7 +1380,6 @@ static void test_caps_and_back_faces(void)
               tried);
         hairobb_free(bvh);
     }
-#undef CAP_RANDOM
 }
 
 /* Options a round BVH must refuse or keep. */

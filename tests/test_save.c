@@ -33,6 +33,7 @@
 #define HAIROBB_IMPLEMENTATION
 #include "../hairobb.h"
 #include "check.h"
+#include "compare.h"
 #include "reference.h"
 #include "scenes.h"
 #include "scratch.h"
@@ -56,11 +57,6 @@ static void make_rays(const hair_scene *s, ray_set *rays, uint64_t seed)
         const float *cp = s->vertices + 4 * (size_t)s->indices[scene_rng_u32(&rng) % s->segment_count];
         scene_ray_near_segment(cp, &rng, rays->org + 3 * i, rays->dir + 3 * i);
     }
-}
-
-static int same_hit(int got_a, const hairobb_hit *a, int got_b, const hairobb_hit *b)
-{
-    return got_a == got_b && memcmp(a, b, sizeof *a) == 0;
 }
 
 /* Rays of `rays` traced through both BVHs: how many answers differ in any bit. */

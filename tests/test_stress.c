@@ -25,6 +25,7 @@
 #define HAIROBB_IMPLEMENTATION
 #include "../hairobb.h"
 #include "check.h"
+#include "compare.h"
 #include "reference.h"
 #include "scenes.h"
 
@@ -199,20 +200,14 @@ static void tally_free(tally *tl)
     free(tl->dt_over_r_wide);
 }
 
-static int compare_doubles(const void *a, const void *b)
+/* compare.h's percentile of values sorted here, in place */
+static double sorted_percentile(double *values, size_t n, double p)
 {
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
+    if (n) qsort(values, n, sizeof(double), compare_doubles);
+    return percentile(values, n, p);
 }
 
-static double percentile(double *values, size_t n, double p)
-{
-    if (n == 0) return 0.0;
-    qsort(values, n, sizeof(double), compare_doubles);
-    return values[(size_t)(p * (double)(n - 1) + 0.5)];
-}
-
-static double tally_percentile(tally *tl, double p) { return percentile(tl->dt_over_r, tl->compared, p); }
+static double tally_percentile(tally *tl, double p) { return sorted_percentile(tl->dt_over_r, tl->compared, p); }
 
 typedef struct scene_view {
     const float *vertices;
@@ -425,7 +420,7 @@ static void test_radius_range(void)
                 make_segment(shapes[shape], radius, tapered, cp);
                 radius_rays(&res, cp, &rng);
             }
-            p99 = percentile(res.hit.dt_over_r_wide, res.hit.compared_wide, 0.99);
+            p99 = sorted_percentile(res.hit.dt_over_r_wide, res.hit.compared_wide, 0.99);
             p99_all = tally_percentile(&res.hit, 0.99);
             max_rel = tally_percentile(&res.hit, 1.0);
             printf("radius 1e-%d%s: %zu rays onto the ribbon (%zu clear of the band: hairobb missed %zu, reference %zu), "

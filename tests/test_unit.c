@@ -21,11 +21,7 @@
 #include "scenes.h"
 
 static uint64_t rng_state = 0x9e3779b97f4a7c15ull;
-static float rnd(void)
-{
-    rng_state ^= rng_state << 13; rng_state ^= rng_state >> 7; rng_state ^= rng_state << 17;
-    return (float)((rng_state >> 40) & 0xffffff) / 16777216.0f;
-}
+static float rnd(void) { return xorshift64_float(&rng_state); }
 
 /* Strands of similar orientation (a combed patch) plus some random ones. */
 static void make_scene(size_t n, float **vertices, uint32_t **indices)
