@@ -24,12 +24,13 @@
       8. THREADS and BUILD MEMORY
       9. REFIT
      10. MOTION BLUR
-     11. .hair FILES
-     12. SAVE AND LOAD
-     13. SIMD PATHS
-     14. THREAD SAFETY
-     15. ERRORS
-     16. SECTIONS OF THIS FILE
+     11. SCENES (several hair groups, instances)
+     12. .hair FILES
+     13. SAVE AND LOAD
+     14. SIMD PATHS
+     15. THREAD SAFETY
+     16. ERRORS
+     17. SECTIONS OF THIS FILE
    Stop after 2 if you only want the API; each declaration below the manual
    says what it takes and returns.
 
@@ -78,6 +79,13 @@
        hairobb_occluded1_from   a shadow ray leaving an earlier hit (HITS)
        hairobb_intersect1_context  intersect1(_from) with a per-call hit filter and its data (HITS)
        hairobb_occluded1_context   occluded1(_from) with a per-call hit filter and its data (HITS)
+     Several hair groups (SCENES)
+       hairobb_scene_build      a top level over instances of BVHs (maps, masks, user pointers)
+       hairobb_scene_update     new maps, masks, users or BVHs for the same instances
+       hairobb_scene_free       frees a scene (not its BVHs; NULL is ignored)
+       hairobb_scene_user       an instance's user pointer
+       hairobb_scene_intersect1 the nearest hit over every instance, hit->instance_id which
+       hairobb_scene_occluded1  whether any instance is hit
      Move the hair
        hairobb_refit            the same segments at new positions (REFIT)
        hairobb_refit_tangents   the same for Hermite segments, with new tangents
@@ -451,7 +459,48 @@
      another T is HAIROBB_ERROR_MISMATCH).
 
 
-  11. .hair FILES
+  11. SCENES (several hair groups, instances)
+  ---------------------------------------------
+     A groom is several hair systems (scalp, brows, lashes, fur patches),
+     often placed more than once. hairobb_scene_build(instances, count,
+     allocator_user, &scene) puts BVHs under one top level: each
+     hairobb_instance names a BVH (several may share one; the scene does
+     not own them), an affine object-to-world map (3 rows of 4 floats:
+     rotation, scale, shear, translation; any invertible map), a mask and a
+     user pointer. hairobb_scene_intersect1 / _occluded1(scene, context,
+     from, ray, ...) trace the ray through every instance it reaches and
+     return the nearest hit (or whether there is one): hit->instance_id
+     names the instance (hairobb_scene_user gives back its pointer),
+     prim_id the segment in its BVH; t is the ray's own parameter (the ray
+     is mapped into each instance, so t, u and v are the same in both
+     spaces), Ng and the tangent are in world space (the normal mapped by
+     the inverse transposed, then made unit). Ties in t go to the lower
+     instance id. A BVH's own calls set instance_id to HAIROBB_INVALID_ID.
+     Masks: an instance is traced by a ray when its mask and the ray's
+     (context->mask) share a bit; 0 in either means every bit, so zeroed
+     structs trace everything.
+     Hit filters: each BVH's own filter and the call's (context->filter)
+     see the caller's ray and hits in world space with instance_id set.
+     Secondary rays: `from` is a scene hit; the segment left is skipped in
+     its own instance only, so a ray reaches the same strand placed
+     elsewhere. `hit` may be `from`.
+     Moving: hairobb_scene_update(scene, instances, count) takes new maps,
+     masks, users or BVHs (refit or rebuilt ones) for the same count and
+     rebuilds the top level (a binary tree over the instances' world boxes,
+     quick next to any BVH's refit). Refit a BVH, then update the scenes
+     that place it: a scene keeps the boxes it was given. A bad instance
+     (no BVH; a map not finite, singular or beyond 1e18) is
+     INVALID_ARGUMENT, and an update then changes nothing. An instance's
+     map is one for the whole frame (ray.time moves the hair of a moving
+     BVH, not the instance). Under a map that does not keep angles (shear,
+     unequal scales) a ribbon faces the ray in object space and a tube's
+     circles become ellipses: the shape the map makes of them.
+     Round-off: the ray is mapped in double and rounded once; against one
+     BVH built over the same hair placed in world space, hits agree as
+     one BVH's agree with the reference (tests/test_scene.c).
+
+
+  12. .hair FILES
   ---------------
      hairobb_hair_load(path, allocator_user, &hair) (or hairobb_hair_read
      from memory) reads Cem Yuksel's format: the file's arrays (points with
@@ -464,7 +513,7 @@
      HAIROBB_ERROR_INVALID_GEOMETRY.
 
 
-  12. SAVE AND LOAD
+  13. SAVE AND LOAD
   -----------------
          size_t size = hairobb_save_size(bvh);
          void *bytes = malloc(size);
@@ -518,7 +567,7 @@
      hairobb_bounds reports must be finite.
 
 
-  13. SIMD PATHS
+  14. SIMD PATHS
   --------------
      The traversal and intersector exist in plain C, SSE2, SSE4.1, AVX and
      AVX2 versions, which give the same hits bit for bit (no FMA). The
@@ -540,15 +589,16 @@
      clang and mingw-w64).
 
 
-  14. THREAD SAFETY
+  15. THREAD SAFETY
   -----------------
      hairobb_intersect1/hairobb_occluded1 (and the _from variants) only
      read the BVH: any number of threads may trace one BVH at once;
-     hairobb_refit writes it (no tracing meanwhile). There is no global
+     hairobb_refit writes it (no tracing meanwhile). The same for scenes:
+     tracing reads, hairobb_scene_update writes. There is no global
      state.
 
 
-  15. ERRORS
+  16. ERRORS
   ----------
      hairobb_build, hairobb_load, the refits and the readers return a
      hairobb_result; hairobb_result_string names it. On failure nothing is
@@ -565,7 +615,7 @@
      ("precision").
 
 
-  16. SECTIONS OF THIS FILE
+  17. SECTIONS OF THIS FILE
   -------------------------
      The implementation follows the data's path. Grep for these anchors
      (docs/design.md walks through them):
@@ -596,6 +646,7 @@
        >>traversal       each layout's node test and the traversal loop
        >>intersector     ray/curve intersection and hit attributes
        >>tracing_api     hairobb_intersect1 and its siblings
+       >>scene           instances under a top level: hairobb_scene_*
        >>dispatch        the kernels' names for their AVX2 copy
        >>licence         the licence, at the end
 */
@@ -860,6 +911,7 @@ typedef struct hairobb_hit {
     float Ng[3];        /* unit geometric normal: the ribbon's, facing the ray origin; a tube's, outward */
     float tangent[3];   /* dP/du at u in world space, not normalised */
     uint32_t prim_id;   /* segment index, HAIROBB_INVALID_ID on a miss */
+    uint32_t instance_id;   /* scenes (SCENES): the instance hit; HAIROBB_INVALID_ID from a BVH's own calls */
 } hairobb_hit;
 
 /* 1: nearest hit in [tnear, tfar] written to *hit; 0: miss, hit->prim_id = HAIROBB_INVALID_ID. */
@@ -885,6 +937,7 @@ HAIROBB_DEF int hairobb_occluded1_from(const hairobb_bvh *bvh, const hairobb_hit
 typedef struct hairobb_context {
     hairobb_filter_fn filter;   /* NULL: none for this call */
     void *user;
+    uint32_t mask;              /* scenes: the ray's mask (SCENES); 0 = every bit. BVH calls ignore it */
 } hairobb_context;
 
 /* intersect1 / occluded1 with a per-call filter; context and from may be
@@ -893,6 +946,29 @@ HAIROBB_DEF int hairobb_intersect1_context(const hairobb_bvh *bvh, const hairobb
                                            const hairobb_ray *ray, hairobb_hit *hit);
 HAIROBB_DEF int hairobb_occluded1_context(const hairobb_bvh *bvh, const hairobb_context *context, const hairobb_hit *from,
                                           const hairobb_ray *ray);
+
+/* Several hair groups in one scene (SCENES): instances of BVHs, each with
+   an affine map, a mask and a user pointer, under one top level. */
+typedef struct hairobb_scene hairobb_scene;
+typedef struct hairobb_instance {
+    const hairobb_bvh *bvh;   /* the hair it places (not owned; several instances may share one) */
+    float transform[12];      /* object to world, 3 rows of 4: world_i = m[4i] x + m[4i+1] y + m[4i+2] z + m[4i+3] */
+    uint32_t mask;            /* traced by rays whose mask shares a bit with it; 0 = every bit */
+    void *user;               /* given back by hairobb_scene_user */
+} hairobb_instance;
+
+HAIROBB_DEF hairobb_result hairobb_scene_build(const hairobb_instance *instances, size_t count, void *allocator_user,
+                                               hairobb_scene **out);
+/* new transforms, masks, users or BVHs (refit or rebuilt) for the same count */
+HAIROBB_DEF hairobb_result hairobb_scene_update(hairobb_scene *scene, const hairobb_instance *instances, size_t count);
+HAIROBB_DEF void hairobb_scene_free(hairobb_scene *scene);
+HAIROBB_DEF void *hairobb_scene_user(const hairobb_scene *scene, uint32_t instance_id);
+/* as hairobb_intersect1_context / hairobb_occluded1_context over every
+   instance; hit->instance_id says which (context, from may be NULL) */
+HAIROBB_DEF int hairobb_scene_intersect1(const hairobb_scene *scene, const hairobb_context *context, const hairobb_hit *from,
+                                         const hairobb_ray *ray, hairobb_hit *hit);
+HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairobb_context *context, const hairobb_hit *from,
+                                        const hairobb_ray *ray);
 
 /* Cem Yuksel's .hair files (www.cemyuksel.com/research/hairmodels): the
    file's arrays, and Bezier segments made from them, ready for hairobb_build. */
@@ -5892,6 +5968,15 @@ typedef struct hairobb__ray_curve {
    many others), and one found again (the same segment at the same u, or
    the two segments of a joint at its point) is not shown. */
 #define HAIROBB__SHOWN 8
+/* An instance of a scene as the tracing reads it (SCENES, >>scene). */
+typedef struct hairobb__placed {
+    const hairobb_bvh *bvh;
+    float to_world[12], to_object[12];   /* affine maps, 3 rows of 4 */
+    uint32_t mask;                       /* 0 given: every bit */
+    void *user;
+    float lower[3], upper[3];            /* world box */
+} hairobb__placed;
+
 typedef struct hairobb__ray_state {
     int filtering;              /* a build-time or per-call filter is set */
     int any_hit;                /* occluded1 */
@@ -5918,6 +6003,8 @@ typedef struct hairobb__ray_state {
     float skip_t;
     float skip_sheet;           /* tubes: the sheet skipped (+1 entries, -1 exits); 0 ribbons: every hit */
     float tube_t_base;          /* tubes: t of the point of the ray the segment tested is relative to */
+    const hairobb__placed *placed;   /* scenes: the instance traced (its hits go to world space); else NULL */
+    uint32_t instance_id;
     int skipping;               /* tubes: set while a skipped segment is tested */
     int cap_candidate;          /* tubes: set while an end cap's hit is offered (the filter's hit is the cap's) */
     int hit_cap;                /* tubes: the hit taken is on an end cap */
@@ -5990,6 +6077,8 @@ static int hairobb__ray_setup(hairobb__ray_state *rs, const hairobb_bvh *bvh, co
     rs->cap_candidate = 0;
     rs->hit_cap = 0;
     rs->cull_back_faces = bvh->cull_back_faces;
+    rs->placed = NULL;
+    rs->instance_id = HAIROBB_INVALID_ID;
     rs->dir_length = sqrtf(hairobb__dot3(ray->dir, ray->dir));
     if (!(rs->dir_length > 0.0f) || !(rs->dir_length < INFINITY) || !(rs->tnear <= rs->tfar)) return 0;
     if (bvh->time_steps && !(rs->time >= 0.0f && rs->time <= 1.0f)) return 0;   /* NaN too */
@@ -6049,6 +6138,24 @@ static int hairobb__ray_setup_from(hairobb__ray_state *rs, const hairobb_bvh *bv
     memcpy(rs->skip_first, cp, sizeof rs->skip_first);
     memcpy(rs->skip_last, cp + 12, sizeof rs->skip_last);
     return 1;
+}
+
+/* A hit in an instance's object space taken to world space: the tangent
+   by the map, the normal by its inverse transposed; t, u, v are the same. */
+static void hairobb__hit_to_world(const hairobb__placed *placed, uint32_t id, hairobb_hit *hit)
+{
+    const float *m = placed->to_world, *inv = placed->to_object;
+    float tangent[3], n[3], length;
+    int i;
+    for (i = 0; i < 3; ++i) {
+        tangent[i] = m[4 * i] * hit->tangent[0] + m[4 * i + 1] * hit->tangent[1] + m[4 * i + 2] * hit->tangent[2];
+        n[i] = inv[i] * hit->Ng[0] + inv[4 + i] * hit->Ng[1] + inv[8 + i] * hit->Ng[2];
+    }
+    length = sqrtf(hairobb__dot3(n, n));
+    if (length > 0.0f && length < INFINITY)
+        for (i = 0; i < 3; ++i) hit->Ng[i] = n[i] / length;
+    memcpy(hit->tangent, tangent, sizeof tangent);
+    hit->instance_id = id;
 }
 
 #endif /* !HAIROBB__KERNEL_PASS */
@@ -7696,6 +7803,7 @@ static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs
         hit->t = t;
         hit->u = u;
         hit->prim_id = prim;
+        hit->instance_id = HAIROBB_INVALID_ID;
         return;
     }
     hairobb__v4 x4 = hairobb__v4_load(c->x), y4 = hairobb__v4_load(c->y), z4 = hairobb__v4_set1(0.0f), r4 = hairobb__v4_load(c->r);
@@ -7732,6 +7840,7 @@ static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs
     hit->t = t;
     hit->u = u;
     hit->prim_id = prim;
+    hit->instance_id = HAIROBB_INVALID_ID;
 }
 
 /* The segment is moved to ray space again: the intersector's copy is not
@@ -7786,6 +7895,7 @@ static int hairobb__hit_filtered_out(hairobb__ray_state *rs, uint32_t prim, floa
     hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));
     hairobb__v4_store(c.r, r);
     hairobb__hit_at(rs->bvh, rs, prim, NULL, &c, u, t, rs->cap_candidate, &hit);
+    if (rs->placed) hairobb__hit_to_world(rs->placed, rs->instance_id, &hit);
     if ((!rs->hit_filter || rs->hit_filter(rs->hit_filter_user, rs->ray, &hit)) &&
         (!rs->call_filter || rs->call_filter(rs->call_filter_user, rs->ray, &hit)))
         return 0;
@@ -7877,6 +7987,406 @@ HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray
 HAIROBB_DEF hairobb_simd hairobb_get_simd(const hairobb_bvh *bvh)
 {
     return bvh ? bvh->simd : HAIROBB_SIMD_NONE;
+}
+
+/* ------------------------------------------------------------------------ */
+/* >>scene  Several hair groups: instances under a top level                */
+/* ------------------------------------------------------------------------ */
+/* A scene keeps each instance's maps both ways and its world box, and a
+   binary tree over those boxes (one instance a leaf, median splits on the
+   widest axis of the centres: scenes hold tens to thousands of instances,
+   a small part of a ray's work). A ray is taken into each instance it
+   reaches (t is the same parameter in both spaces: the map is affine and
+   dir is not normalised) and traced there with tfar the nearest hit so
+   far; ties in t go to the lower instance id. */
+typedef struct hairobb__scene_node {
+    float lower[3], upper[3];
+    uint32_t index, count;   /* count 1: the leaf of order[index]; 0: children at index, index + 1 */
+} hairobb__scene_node;
+
+struct hairobb_scene {
+    void *allocator_user;
+    size_t count;
+    hairobb__placed *placed;
+    uint32_t *order;               /* instance ids in tree order */
+    hairobb__scene_node *nodes;    /* 2 count - 1 of them, the root first */
+};
+
+/* The inverse of the affine map m (3 rows of 4) into inverse, in double;
+   0 where m is not finite or (nearly) singular. */
+static int hairobb__affine_inverse(const float m[12], float inverse[12])
+{
+    double a[3][3], adj[3][3], det, scale = 0.0, out[12];
+    int i, j;
+    for (i = 0; i < 12; ++i) {
+        if (!(fabsf(m[i]) <= HAIROBB__MAX_COORD)) return 0;   /* NaN, Inf, or beyond the input's range */
+    }
+    for (i = 0; i < 3; ++i)
+        for (j = 0; j < 3; ++j) {
+            a[i][j] = m[4 * i + j];
+            if (fabs(a[i][j]) > scale) scale = fabs(a[i][j]);
+        }
+    for (i = 0; i < 3; ++i)
+        for (j = 0; j < 3; ++j) {
+            int i1 = (j + 1) % 3, i2 = (j + 2) % 3, j1 = (i + 1) % 3, j2 = (i + 2) % 3;
+            adj[i][j] = a[i1][j1] * a[i2][j2] - a[i1][j2] * a[i2][j1];   /* cofactor (j, i) */
+        }
+    det = a[0][0] * adj[0][0] + a[0][1] * adj[1][0] + a[0][2] * adj[2][0];
+    /* below 2^-40 of the largest entry cubed: no float map back */
+    if (!(fabs(det) > scale * scale * scale * 9.094947017729282e-13)) return 0;
+    for (i = 0; i < 3; ++i) {
+        for (j = 0; j < 3; ++j) out[4 * i + j] = adj[i][j] / det;
+        out[4 * i + 3] = -(out[4 * i] * m[3] + out[4 * i + 1] * m[7] + out[4 * i + 2] * m[11]);
+    }
+    for (i = 0; i < 12; ++i) {
+        if (!(fabs(out[i]) <= 1e30)) return 0;
+        inverse[i] = (float)out[i];
+    }
+    return 1;
+}
+
+/* An instance checked and placed: its maps, mask and world box (the BVH's
+   box mapped, in double, and widened by the rounding of float). */
+static hairobb_result hairobb__place(const hairobb_instance *instance, hairobb__placed *placed)
+{
+    float lower[3], upper[3];
+    double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL}, magnitude = 0.0;
+    int corner, i;
+    if (!instance->bvh) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    if (!hairobb__affine_inverse(instance->transform, placed->to_object)) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    memcpy(placed->to_world, instance->transform, sizeof placed->to_world);
+    placed->bvh = instance->bvh;
+    placed->mask = instance->mask ? instance->mask : 0xffffffffu;
+    placed->user = instance->user;
+    hairobb_bounds(instance->bvh, lower, upper);
+    for (corner = 0; corner < 8; ++corner) {
+        double p[3];
+        p[0] = corner & 1 ? upper[0] : lower[0];
+        p[1] = corner & 2 ? upper[1] : lower[1];
+        p[2] = corner & 4 ? upper[2] : lower[2];
+        for (i = 0; i < 3; ++i) {
+            const float *row = instance->transform + 4 * i;
+            double w = row[0] * p[0] + row[1] * p[1] + row[2] * p[2] + row[3];
+            if (w < lo[i]) lo[i] = w;
+            if (w > hi[i]) hi[i] = w;
+        }
+    }
+    for (i = 0; i < 3; ++i) magnitude = fmax(magnitude, fmax(fabs(lo[i]), fabs(hi[i])));
+    for (i = 0; i < 3; ++i) {
+        /* the tracing maps the ray, not the box: widened by the rounding of
+           a map in float (a few ulps of the largest coordinate) */
+        double pad = magnitude * (64.0 * FLT_EPSILON) + 1e-30;
+        placed->lower[i] = (float)(lo[i] - pad);
+        placed->upper[i] = (float)(hi[i] + pad);
+    }
+    if (!(magnitude < 1e30)) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    return HAIROBB_OK;
+}
+
+static float hairobb__placed_centre(const hairobb__placed *p, int axis) { return 0.5f * (p->lower[axis] + p->upper[axis]); }
+
+/* order[begin, end) rearranged so that its middle entry has the middle
+   centre on axis, the lower ones before it (quickselect). */
+static void hairobb__select_middle(const hairobb__placed *placed, uint32_t *order, size_t begin, size_t end, int axis)
+{
+    size_t middle = begin + (end - begin) / 2;
+    while (end - begin > 1) {
+        float pivot = hairobb__placed_centre(&placed[order[begin + (end - begin) / 2]], axis);
+        size_t low = begin, high = end - 1, k = begin;
+        /* three-way partition: below, equal, above the pivot */
+        while (k <= high) {
+            float c = hairobb__placed_centre(&placed[order[k]], axis);
+            uint32_t swap;
+            if (c < pivot) {
+                swap = order[low]; order[low] = order[k]; order[k] = swap;
+                ++low;
+                ++k;
+            } else if (c > pivot) {
+                swap = order[high]; order[high] = order[k]; order[k] = swap;
+                if (high == 0) break;
+                --high;
+            } else {
+                ++k;
+            }
+        }
+        if (middle < low) end = low;
+        else if (middle > high) begin = high + 1;
+        else return;
+    }
+}
+
+/* The tree over order[begin, end) at nodes[at]; children at *next on. */
+static void hairobb__scene_tree(hairobb_scene *scene, size_t at, size_t begin, size_t end, size_t *next)
+{
+    hairobb__scene_node *node = &scene->nodes[at];
+    float lo[3], hi[3];
+    size_t i, middle;
+    int k, axis = 0;
+    for (k = 0; k < 3; ++k) {
+        node->lower[k] = lo[k] = INFINITY;
+        node->upper[k] = hi[k] = -INFINITY;
+    }
+    for (i = begin; i < end; ++i) {
+        const hairobb__placed *p = &scene->placed[scene->order[i]];
+        for (k = 0; k < 3; ++k) {
+            node->lower[k] = hairobb__minf(node->lower[k], p->lower[k]);
+            node->upper[k] = hairobb__maxf(node->upper[k], p->upper[k]);
+            lo[k] = hairobb__minf(lo[k], hairobb__placed_centre(p, k));
+            hi[k] = hairobb__maxf(hi[k], hairobb__placed_centre(p, k));
+        }
+    }
+    if (end - begin == 1) {
+        node->index = (uint32_t)begin;
+        node->count = 1;
+        return;
+    }
+    for (k = 1; k < 3; ++k)
+        if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
+    hairobb__select_middle(scene->placed, scene->order, begin, end, axis);
+    middle = begin + (end - begin) / 2;
+    node->index = (uint32_t)*next;
+    node->count = 0;
+    *next += 2;
+    hairobb__scene_tree(scene, node->index, begin, middle, next);
+    hairobb__scene_tree(scene, (size_t)node->index + 1, middle, end, next);
+}
+
+/* The instances checked into placed (count of them), then the tree. */
+static hairobb_result hairobb__scene_fill(hairobb_scene *scene, const hairobb_instance *instances)
+{
+    size_t i, next = 1;
+    for (i = 0; i < scene->count; ++i) {
+        hairobb__placed check;
+        hairobb_result result = hairobb__place(&instances[i], &check);
+        if (result != HAIROBB_OK) return result;
+    }
+    for (i = 0; i < scene->count; ++i) {
+        (void)hairobb__place(&instances[i], &scene->placed[i]);
+        scene->order[i] = (uint32_t)i;
+    }
+    if (scene->count) hairobb__scene_tree(scene, 0, 0, scene->count, &next);
+    return HAIROBB_OK;
+}
+
+HAIROBB_DEF void hairobb_scene_free(hairobb_scene *scene)
+{
+    if (!scene) return;
+    HAIROBB_FREE(scene->placed, scene->allocator_user);
+    HAIROBB_FREE(scene->order, scene->allocator_user);
+    HAIROBB_FREE(scene->nodes, scene->allocator_user);
+    HAIROBB_FREE(scene, scene->allocator_user);
+}
+
+HAIROBB_DEF hairobb_result hairobb_scene_build(const hairobb_instance *instances, size_t count, void *allocator_user,
+                                               hairobb_scene **out)
+{
+    hairobb_scene *scene;
+    hairobb_result result;
+    if (out) *out = NULL;
+    if (!out || (count && !instances)) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    if (count > 0x7fffffffu) return HAIROBB_ERROR_TOO_LARGE;
+    scene = HAIROBB__CAST(hairobb_scene *, HAIROBB_MALLOC(sizeof *scene, allocator_user));
+    if (!scene) return HAIROBB_ERROR_OUT_OF_MEMORY;
+    memset(scene, 0, sizeof *scene);
+    scene->allocator_user = allocator_user;
+    scene->count = count;
+    if (count) {
+        scene->placed = HAIROBB__CAST(hairobb__placed *, HAIROBB_MALLOC(count * sizeof *scene->placed, allocator_user));
+        scene->order = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(count * sizeof *scene->order, allocator_user));
+        scene->nodes = HAIROBB__CAST(hairobb__scene_node *, HAIROBB_MALLOC((2 * count - 1) * sizeof *scene->nodes, allocator_user));
+        if (!scene->placed || !scene->order || !scene->nodes) {
+            hairobb_scene_free(scene);
+            return HAIROBB_ERROR_OUT_OF_MEMORY;
+        }
+    }
+    result = hairobb__scene_fill(scene, instances);
+    if (result != HAIROBB_OK) {
+        hairobb_scene_free(scene);
+        return result;
+    }
+    *out = scene;
+    return HAIROBB_OK;
+}
+
+HAIROBB_DEF hairobb_result hairobb_scene_update(hairobb_scene *scene, const hairobb_instance *instances, size_t count)
+{
+    if (!scene || (count && !instances) || count != scene->count) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    return hairobb__scene_fill(scene, instances);   /* checks every instance before it changes any */
+}
+
+HAIROBB_DEF void *hairobb_scene_user(const hairobb_scene *scene, uint32_t instance_id)
+{
+    return scene && instance_id < scene->count ? scene->placed[instance_id].user : NULL;
+}
+
+/* The ray in an instance's object space: the same t, tnear, tfar, time.
+   Mapped in double and rounded once: in float the origin's rounding (a
+   few ulps of its distance, 10 units away about 1e-6) reached 4e-3 of a
+   fine hair's radius in t. */
+static void hairobb__ray_to_object(const hairobb__placed *placed, const hairobb_ray *ray, hairobb_ray *object)
+{
+    const float *m = placed->to_object;
+    int i;
+    for (i = 0; i < 3; ++i) {
+        object->org[i] = (float)((double)m[4 * i] * ray->org[0] + (double)m[4 * i + 1] * ray->org[1] +
+                                 (double)m[4 * i + 2] * ray->org[2] + (double)m[4 * i + 3]);
+        object->dir[i] = (float)((double)m[4 * i] * ray->dir[0] + (double)m[4 * i + 1] * ray->dir[1] + (double)m[4 * i + 2] * ray->dir[2]);
+    }
+    object->tnear = ray->tnear;
+    object->tfar = ray->tfar;
+    object->time = ray->time;
+}
+
+/* The world box's slab test, [tnear, tfar] against it (a zero direction
+   component: the origin within the slab). */
+static int hairobb__scene_box(const float lower[3], const float upper[3], const float org[3], const float inv_dir[3],
+                              const float dir[3], float tnear, float tfar)
+{
+    int k;
+    for (k = 0; k < 3; ++k) {
+        float t0, t1;
+        if (dir[k] == 0.0f) {
+            if (org[k] < lower[k] || org[k] > upper[k]) return 0;
+            continue;
+        }
+        t0 = (lower[k] - org[k]) * inv_dir[k];
+        t1 = (upper[k] - org[k]) * inv_dir[k];
+        tnear = hairobb__maxf(tnear, hairobb__minf(t0, t1));
+        tfar = hairobb__minf(tfar, hairobb__maxf(t0, t1));
+    }
+    return tnear <= tfar * HAIROBB__FAR_SCALE;
+}
+
+/* Each instance the ray reaches, nearest box first: visit(instance id)
+   returns 1 to stop. The tfar the boxes are tested against is *tfar, read
+   again at each step (it shrinks as hits are found). */
+typedef struct hairobb__scene_walk {
+    const hairobb_scene *scene;
+    const hairobb_ray *ray;
+    uint32_t mask;
+    const float *tfar;
+    float inv_dir[3];
+} hairobb__scene_walk;
+
+#define HAIROBB__SCENE_STACK 64   /* median splits: depth <= log2(2^31) + 1 */
+
+static int hairobb__scene_next(hairobb__scene_walk *w, uint32_t *stack, int *sp, uint32_t *instance)
+{
+    const hairobb_scene *scene = w->scene;
+    while (*sp > 0) {
+        const hairobb__scene_node *node = &scene->nodes[stack[--*sp]];
+        if (!hairobb__scene_box(node->lower, node->upper, w->ray->org, w->inv_dir, w->ray->dir, w->ray->tnear, *w->tfar)) continue;
+        if (node->count) {
+            uint32_t id = scene->order[node->index];
+            if (!(scene->placed[id].mask & w->mask)) continue;
+            *instance = id;
+            return 1;
+        } else {
+            /* the nearer child (by its box's centre along the ray) on top */
+            const hairobb__scene_node *a = &scene->nodes[node->index], *b = a + 1;
+            float da = 0.0f, db = 0.0f;
+            int k;
+            for (k = 0; k < 3; ++k) {
+                da += (a->lower[k] + a->upper[k]) * w->ray->dir[k];
+                db += (b->lower[k] + b->upper[k]) * w->ray->dir[k];
+            }
+            stack[(*sp)++] = da < db ? node->index + 1 : node->index;
+            stack[(*sp)++] = da < db ? node->index : node->index + 1;
+        }
+    }
+    return 0;
+}
+
+static int hairobb__scene_walk_start(hairobb__scene_walk *w, const hairobb_scene *scene, const hairobb_context *context,
+                                     const hairobb_ray *ray, const float *tfar)
+{
+    int k;
+    w->scene = scene;
+    w->ray = ray;
+    w->mask = context && context->mask ? context->mask : 0xffffffffu;
+    w->tfar = tfar;
+    for (k = 0; k < 3; ++k) w->inv_dir[k] = ray->dir[k] != 0.0f ? 1.0f / ray->dir[k] : 0.0f;
+    return scene->count > 0 && ray->tnear <= ray->tfar;
+}
+
+/* `from` as the instance's own ray would have it: Ng back in object space
+   (by the transpose of the object-to-world map, which keeps its sign
+   against any direction mapped alike). */
+static void hairobb__from_to_object(const hairobb__placed *placed, const hairobb_hit *from, hairobb_hit *object)
+{
+    const float *m = placed->to_world;
+    int i;
+    *object = *from;
+    for (i = 0; i < 3; ++i) object->Ng[i] = m[i] * from->Ng[0] + m[4 + i] * from->Ng[1] + m[8 + i] * from->Ng[2];
+}
+
+/* The ray traced in instance id, tfar its own; 0 where it cannot be (a
+   direction the map sends to 0 or out of range). */
+static int hairobb__scene_trace(const hairobb_scene *scene, uint32_t id, const hairobb_context *context, const hairobb_hit *from,
+                                const hairobb_ray *ray, float tfar, int any_hit, hairobb__ray_state *rs)
+{
+    const hairobb__placed *placed = &scene->placed[id];
+    hairobb_ray object;
+    hairobb_hit from_object;
+    const hairobb_hit *leaving = NULL;
+    hairobb__ray_to_object(placed, ray, &object);
+    object.tfar = tfar;
+    if (from && from->instance_id == id) {
+        hairobb__from_to_object(placed, from, &from_object);
+        leaving = &from_object;
+    }
+    if (!hairobb__ray_setup_from(rs, placed->bvh, leaving, &object)) return 0;
+    rs->ray = ray;   /* filters are shown the caller's ray, and hits in world space */
+    rs->placed = placed;
+    rs->instance_id = id;
+    hairobb__set_filters(rs, placed->bvh, context, any_hit);
+    return hairobb__trace(placed->bvh, rs, any_hit);
+}
+
+HAIROBB_DEF int hairobb_scene_intersect1(const hairobb_scene *scene, const hairobb_context *context, const hairobb_hit *from,
+                                         const hairobb_ray *ray, hairobb_hit *hit)
+{
+    hairobb__scene_walk walk;
+    hairobb__ray_state rs;
+    hairobb_hit best, leaving;
+    uint32_t stack[HAIROBB__SCENE_STACK], id, best_id = HAIROBB_INVALID_ID;
+    float best_t;
+    int sp = 1;
+    if (!hit) return 0;
+    if (from) leaving = *from;   /* read before *hit is written: they may be one hit */
+    hit->prim_id = hit->instance_id = HAIROBB_INVALID_ID;
+    if (!scene || !ray) return 0;
+    best_t = ray->tfar;
+    if (!hairobb__scene_walk_start(&walk, scene, context, ray, &best_t)) return 0;
+    stack[0] = 0;
+    while (hairobb__scene_next(&walk, stack, &sp, &id)) {
+        if (!hairobb__scene_trace(scene, id, context, from ? &leaving : NULL, ray, best_t, 0, &rs)) continue;
+        if (best_id != HAIROBB_INVALID_ID && !(rs.tfar < best_t || (rs.tfar == best_t && id < best_id))) continue;
+        hairobb__hit_at(scene->placed[id].bvh, &rs, rs.hit_prim, rs.hit_points, &rs.hit_curve, rs.hit_u, rs.tfar, rs.hit_cap, &best);
+        hairobb__hit_to_world(&scene->placed[id], id, &best);
+        best_t = rs.tfar;
+        best_id = id;
+    }
+    if (best_id == HAIROBB_INVALID_ID) return 0;
+    *hit = best;
+    return 1;
+}
+
+HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairobb_context *context, const hairobb_hit *from,
+                                        const hairobb_ray *ray)
+{
+    hairobb__scene_walk walk;
+    hairobb__ray_state rs;
+    uint32_t stack[HAIROBB__SCENE_STACK], id;
+    float tfar;
+    int sp = 1;
+    if (!scene || !ray) return 0;
+    tfar = ray->tfar;
+    if (!hairobb__scene_walk_start(&walk, scene, context, ray, &tfar)) return 0;
+    stack[0] = 0;
+    while (hairobb__scene_next(&walk, stack, &sp, &id))
+        if (hairobb__scene_trace(scene, id, context, from, ray, tfar, 1, &rs)) return 1;
+    return 0;
 }
 
 /* ------------------------------------------------------------------------ */
