@@ -36,9 +36,10 @@ static inline double percentile(const double *sorted, size_t n, double p)
 /* ------------------------------------------------------------------------ */
 /* Two traces */
 
-/* The same answer: both miss, or both hit with the same bits (t, u, v, Ng,
-   tangent, prim_id: a hairobb_hit has no padding). A miss writes prim_id
-   alone, so the rest of a missed hit is not compared. */
+/* The same answer: both miss, or both hit with the same bits in every
+   field (t, u, v, Ng, tangent, prim_id, instance_id: 4-byte fields, no
+   padding). A miss writes prim_id alone, so the rest of a missed hit is not
+   compared. */
 static inline int same_hit(int got_a, const hairobb_hit *a, int got_b, const hairobb_hit *b)
 {
     return got_a == got_b && (!got_a || memcmp(a, b, sizeof *a) == 0);
