@@ -163,14 +163,20 @@ typedef struct variant {
 } variant;
 
 /* the rows of all_variants (variants.c checks the count); result arrays are this long */
-enum { VARIANT_COUNT = 30 };
+enum { VARIANT_COUNT = 31 };
 extern const variant all_variants[];
 
 /* The baseline of every ratio */
 #define BASELINE_KEY "embree-r4"
-/* hairobb without the copy against its peer in memory, Embree's compact mode */
-#define COMPACT_KEY "no-copy"
-#define COMPACT_PEER_KEY "embree-compact"
+/* Rows timed against a peer of their own kind as well, the ratio taken
+   within each round as the ratio to the baseline is: hairobb without the
+   copy against Embree's compact mode (peers in memory), hairobb's round
+   curves against Embree's, default and robust (peers in surface). */
+typedef struct peer_pair {
+    const char *row, *peer; /* variant keys */
+} peer_pair;
+enum { PEER_PAIR_COUNT = 3 };
+extern const peer_pair peer_pairs[PEER_PAIR_COUNT];
 
 /* ======================================================================== */
 /* Memory                                                                   */
@@ -265,7 +271,6 @@ typedef struct variant_result {
        each round; NAN when not measured */
     spread mrays[RAY_KIND_COUNT][MAX_THREAD_COUNTS];
     spread ratio[RAY_KIND_COUNT][MAX_THREAD_COUNTS];
-    spread peer_ratio[RAY_KIND_COUNT][MAX_THREAD_COUNTS]; /* COMPACT_KEY only: to COMPACT_PEER_KEY, within rounds */
     int has_accuracy;
     accuracy_summary accuracy;
     rss_step build_rss;    /* the process's resident memory over the build */
@@ -280,6 +285,8 @@ typedef struct scene_result {
     variant_result variants[VARIANT_COUNT];
     scene_basis basis;
     int selected[VARIANT_COUNT]; /* the variants run on this scene */
+    /* row / peer of each of peer_pairs, within rounds; NAN when either was not measured */
+    spread peer_ratio[PEER_PAIR_COUNT][RAY_KIND_COUNT][MAX_THREAD_COUNTS];
     scene_layout layout;
 } scene_result;
 
@@ -360,8 +367,8 @@ unsigned max_threads(const options *o);
 double trace_pass(const tracer *t, const ray_set *rays, hit_record *hits, unsigned thread_count);
 spread spread_of(const double *values, int n);
 const char *spread_cell(char *cell, size_t size, spread x);
-void time_in_rounds(const options *o, workload *w, built_accel accel[VARIANT_COUNT], scene_result *sr, int base, int compact,
-                    int peer);
+void time_in_rounds(const options *o, workload *w, built_accel accel[VARIANT_COUNT], scene_result *sr, int base,
+                    int peers[PEER_PAIR_COUNT][2]);
 
 /* variants.c */
 extern test_allocator hairobb_meter;
@@ -369,6 +376,7 @@ int variant_index(const char *key);
 int select_variants(const char *list, int selected[VARIANT_COUNT]);
 hairobb_basis variant_basis(const variant *v, const hair_scene *s);
 int variant_comparable(const variant *v, scene_basis basis);
+int variant_on_chart(const variant *v, scene_basis basis);
 /* round curves (hairobb's or Embree's): measured against the tube reference */
 int variant_is_tube(const variant *v);
 int spawn_variant(const hair_scene *s);

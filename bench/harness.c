@@ -195,12 +195,17 @@ const char *spread_cell(char *cell, size_t size, spread x)
 
 /* Times every built variant on each ray set and thread count, in rounds
    (bench/bench.c says why); fills mrays, ratio (to variant base, within
-   each round) and compact's peer_ratio (to variant peer). The caller looks
-   the three up (variant_index): the harness knows no variant by name. */
-void time_in_rounds(const options *o, workload *w, built_accel accel[VARIANT_COUNT], scene_result *sr, int base, int compact,
-                    int peer)
+   each round) and the scene's peer_ratio (row peers[p][0] to peers[p][1],
+   within each round). The caller looks them up (variant_index): the
+   harness knows no variant by name. */
+void time_in_rounds(const options *o, workload *w, built_accel accel[VARIANT_COUNT], scene_result *sr, int base,
+                    int peers[PEER_PAIR_COUNT][2])
 {
     static double mrays[VARIANT_COUNT][MAX_ROUNDS];
+    for (int p = 0; p < PEER_PAIR_COUNT; p++)
+        for (int k = 0; k < RAY_KIND_COUNT; k++)
+            for (int t = 0; t < MAX_THREAD_COUNTS; t++)
+                sr->peer_ratio[p][k][t] = (spread){NAN, NAN, NAN};
     for (int k = 0; k < RAY_KIND_COUNT; k++) {
         const ray_set *rays = &w->rays[k];
         if (!o->ray_kind_enabled[k] || rays->count == 0)
@@ -229,11 +234,14 @@ void time_in_rounds(const options *o, workload *w, built_accel accel[VARIANT_COU
                 r->ratio[k][t] = spread_of(ratios, sr->variants[base].measured ? o->rounds : 0);
                 r->mrays[k][t] = spread_of(mrays[i], o->rounds);
             }
-            if (sr->variants[compact].measured && sr->variants[peer].measured) {
+            for (int p = 0; p < PEER_PAIR_COUNT; p++) {
+                int row = peers[p][0], peer = peers[p][1];
                 double ratios[MAX_ROUNDS];
+                if (row < 0 || peer < 0 || !sr->variants[row].measured || !sr->variants[peer].measured)
+                    continue;
                 for (int round = 0; round < o->rounds; round++)
-                    ratios[round] = mrays[compact][round] / mrays[peer][round];
-                sr->variants[compact].peer_ratio[k][t] = spread_of(ratios, o->rounds);
+                    ratios[round] = mrays[row][round] / mrays[peer][round];
+                sr->peer_ratio[p][k][t] = spread_of(ratios, o->rounds);
             }
         }
     }

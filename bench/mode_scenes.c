@@ -236,7 +236,12 @@ static int run_scene(const options *o, int index, const int requested[VARIANT_CO
         if (selected[i])
             build_and_record(&w, &all_variants[i], &accel[i], &sr->variants[i]);
     rss_step_begin(&w.trace_rss);
-    time_in_rounds(o, &w, accel, sr, variant_index(BASELINE_KEY), variant_index(COMPACT_KEY), variant_index(COMPACT_PEER_KEY));
+    int peers[PEER_PAIR_COUNT][2];
+    for (int p = 0; p < PEER_PAIR_COUNT; p++) {
+        peers[p][0] = variant_index(peer_pairs[p].row);
+        peers[p][1] = variant_index(peer_pairs[p].peer);
+    }
+    time_in_rounds(o, &w, accel, sr, variant_index(BASELINE_KEY), peers);
     rss_step_end(&w.trace_rss);
     for (int i = 0; i < VARIANT_COUNT; i++) {
         variant_result *r = &sr->variants[i];

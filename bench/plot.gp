@@ -6,8 +6,10 @@
 # and against the hit/miss disagreement rate (right), both on log x axes.
 # Rows with chart_series "hairobb" (precision variants) and "embree" (flat
 # curves at each tessellation rate) are points, each labelled with its
-# variant; an exact 0 is drawn at a floor, marked by a dashed line and a
-# note that says what a point on it means.
+# variant; "hairobb-round" and "embree-round" (round curves: tubes, their
+# errors against the tube reference, not the ribbon's) are triangles in the
+# same colours, named in the key as tubes. An exact 0 is drawn at a floor,
+# marked by a dashed line and a note that says what a point on it means.
 #
 # Variants of equal accuracy share an x, and in the hit/miss panel every
 # variant without a disagreement sits at the floor: so each label takes the
@@ -66,11 +68,18 @@ measured(x) = (x == x)   # not NaN (a variant not measured)
 floored(x, f) = (x > f ? x : f)
 in_series(scene, series) = (strcol("scene") eq scene && strcol("chart_series") eq series)
 x_of(scene, series, name, f) = in_series(scene, series) && measured(column(name)) ? floored(column(name), f) : NaN
-# hairobb filled circles, Embree open squares: a point of each at one place shows both
+# hairobb filled circles, Embree open squares: a point of each at one place
+# shows both; their tubes filled and open triangles
 hairobb_colour = "#1f77b4"
 embree_colour = "#d62728"
+# the series by chart_series, and each one's title in the key
+series_of(name) = name eq "hairobb" ? 1 : name eq "embree" ? 2 : name eq "hairobb-round" ? 3 : 4
+array SERIES_TITLE[4] = ["hairobb", "Embree flat", "hairobb tubes (tube ref.)", "Embree round (tube ref.)"]
+array SHOWN[4]   # the series with a point in the panel drawn
+key_title(series) = SHOWN[series] ? SERIES_TITLE[series] : ""
 
-# A panel's points: data and graph coordinates, variant, series (1 hairobb, 2 Embree).
+# A panel's points: data and graph coordinates, variant, series (1 hairobb,
+# 2 Embree, 3 hairobb's tubes, 4 Embree's tubes: series_of).
 MAX_POINTS = 32
 array X[MAX_POINTS]
 array Y[MAX_POINTS]
@@ -101,13 +110,14 @@ label_x0(p, side, width) = label_anchor(p, side) - (side == 1 ? 0 : side == -1 ?
 label_y(p, c) = GY[p] + LINES[c] * char_h
 # Where the floor's note may go, in the order tried: right of the floor's
 # line (1), left of it (-1), or as near it as the panel allows (0), and its
-# centre's height in lines (the key is 3.5 high).
+# centre's height in lines (the last three above the key: set per panel,
+# the key being a line a series shown and 1.5 more).
 array NOTE_SIDE[5] = [1, -1, 1, -1, 0]
 array NOTE_LINES[5] = [1.2, 1.2, 4.7, 4.7, 4.7]
 note_x(side) = side == 1 ? floor_x + char_w : side == -1 ? floor_x - char_w - width : \
                (floor_x + char_w + width <= 1 ? floor_x + char_w : 1 - width)
 add_point(x, y) = (points = points + 1, X[points] = x, Y[points] = y, NAME[points] = strcol("variant"), \
-                   SERIES[points] = strcol("chart_series") eq "hairobb" ? 1 : 2, \
+                   SERIES[points] = series_of(strcol("chart_series")), \
                    accuracy_rays = column("accuracy_rays"), 0)
 
 set multiplot layout rows, 2
@@ -151,7 +161,18 @@ do for [i = 1:rows] {
                 GY[p] = Y[p] / y_top
                 dummy = take(GX[p] - mark_w, GX[p] + mark_w, GY[p] - mark_h, GY[p] + mark_h)
             }
-            dummy = take(1 - 21 * char_w, 1, 0, 3.5 * char_h)   # the key
+            # the key: a line a series shown, as wide as its longest title and the sample
+            do for [series = 1:4] { SHOWN[series] = 0 }
+            do for [p = 1:points] { SHOWN[SERIES[p]] = 1 }
+            key_lines = 0
+            key_chars = 0
+            do for [series = 1:4] {
+                key_lines = key_lines + SHOWN[series]
+                key_chars = SHOWN[series] && strlen(SERIES_TITLE[series]) > key_chars ? strlen(SERIES_TITLE[series]) : key_chars
+            }
+            key_h = key_lines + 1.5
+            dummy = take(1 - (key_chars + 10) * char_w, 1, 0, key_h * char_h)
+            do for [c = 3:5] { NOTE_LINES[c] = key_h + 1.2 }
             # what a point at the floor means, beside a dashed line at the floor
             floor_x = log(f / x_min) / log(x_max / x_min)
             at_floor = 0
@@ -180,7 +201,7 @@ do for [i = 1:rows] {
                 placed = placed ? placed : 1   # nowhere free: beside the point, over what is there
                 side = SIDE[placed]
                 dummy = take_text(label_x0(p, side, width), label_y(p, placed), width)
-                colour = SERIES[p] == 1 ? hairobb_colour : embree_colour
+                colour = SERIES[p] % 2 == 1 ? hairobb_colour : embree_colour
                 set label p + 1 NAME[p] at graph label_anchor(p, side), graph label_y(p, placed) tc rgb colour front
                 if (side == 1) { set label p + 1 left }
                 if (side == -1) { set label p + 1 right }
@@ -191,8 +212,11 @@ do for [i = 1:rows] {
                 }
             }
 
-            plot tsv using (x_of(sc, "hairobb", name, f)):(column(speed)) with points pt 7 ps 1.5 lc rgb hairobb_colour title "hairobb", \
-                 tsv using (x_of(sc, "embree", name, f)):(column(speed)) with points pt 4 ps 1.5 lw 2 lc rgb embree_colour title "Embree flat"
+            # a series without a point in this panel is left out of the key (an empty title)
+            plot tsv using (x_of(sc, "hairobb", name, f)):(column(speed)) with points pt 7 ps 1.5 lc rgb hairobb_colour title key_title(1), \
+                 tsv using (x_of(sc, "embree", name, f)):(column(speed)) with points pt 4 ps 1.5 lw 2 lc rgb embree_colour title key_title(2), \
+                 tsv using (x_of(sc, "hairobb-round", name, f)):(column(speed)) with points pt 9 ps 1.6 lc rgb hairobb_colour title key_title(3), \
+                 tsv using (x_of(sc, "embree-round", name, f)):(column(speed)) with points pt 8 ps 1.6 lw 2 lc rgb embree_colour title key_title(4)
         }
         unset label
         unset arrow

@@ -239,22 +239,35 @@ void print_speed_table(const options *o, const scene_result *sr, const int selec
             printf("\n");
         }
     }
-    /* the compact modes, each against the other, within rounds */
-    const variant_result *compact = &sr->variants[variant_index(COMPACT_KEY)];
-    const variant_result *peer = &sr->variants[variant_index(COMPACT_PEER_KEY)];
-    if (selected[variant_index(COMPACT_KEY)] && compact->measured && selected[variant_index(COMPACT_PEER_KEY)] && peer->measured) {
-        printf("\n%s / %s (peers in memory), the ratio taken within each round: median [min-max]\n",
-               all_variants[variant_index(COMPACT_KEY)].label, all_variants[variant_index(COMPACT_PEER_KEY)].label);
-        printf("%-21s", "variant");
-        for (int k = 0; k < RAY_KIND_COUNT; k++)
-            for (int t = 0; t < o->thread_count_count && o->ray_kind_enabled[k]; t++) {
-                snprintf(heading, sizeof heading, "%s %ut", ray_kind_names[k], o->thread_counts[t]);
-                printf(" %-17s", heading);
-            }
-        printf("\n%-21s", all_variants[variant_index(COMPACT_KEY)].label);
+    /* each row against its peer (peer_pairs), within rounds */
+    int width = 0;
+    for (int p = 0; p < PEER_PAIR_COUNT; p++) {
+        int row = variant_index(peer_pairs[p].row), peer = variant_index(peer_pairs[p].peer);
+        int length = (int)(strlen(all_variants[row].label) + strlen(all_variants[peer].label) + 3);
+        if (selected[row] && sr->variants[row].measured && selected[peer] && sr->variants[peer].measured)
+            width = length > width ? length : width;
+    }
+    if (width == 0)
+        return;
+    printf("\nthis / its peer (no copy: in memory; round curves: in surface), the ratio taken within each round: "
+           "median [min-max]\n");
+    printf("%-*s", width, "variant / peer");
+    for (int k = 0; k < RAY_KIND_COUNT; k++)
+        for (int t = 0; t < o->thread_count_count && o->ray_kind_enabled[k]; t++) {
+            snprintf(heading, sizeof heading, "%s %ut", ray_kind_names[k], o->thread_counts[t]);
+            printf(" %-17s", heading);
+        }
+    printf("\n");
+    for (int p = 0; p < PEER_PAIR_COUNT; p++) {
+        int row = variant_index(peer_pairs[p].row), peer = variant_index(peer_pairs[p].peer);
+        char pair[96];
+        if (!selected[row] || !sr->variants[row].measured || !selected[peer] || !sr->variants[peer].measured)
+            continue;
+        snprintf(pair, sizeof pair, "%s / %s", all_variants[row].label, all_variants[peer].label);
+        printf("%-*s", width, pair);
         for (int k = 0; k < RAY_KIND_COUNT; k++)
             for (int t = 0; t < o->thread_count_count && o->ray_kind_enabled[k]; t++)
-                printf(" %-17s", spread_cell(cell, sizeof cell, compact->peer_ratio[k][t]));
+                printf(" %-17s", spread_cell(cell, sizeof cell, sr->peer_ratio[p][k][t]));
         printf("\n");
     }
 }
@@ -330,14 +343,15 @@ void print_ablation_table(const options *o, const scene_result *results, int sce
     }
 }
 
-/* The chart's points as a table: precision variants and Embree rates. */
+/* The chart's points as a table: precision variants, Embree rates and the
+   round curves (tubes, each against the tube reference). */
 void print_tradeoff_table(const options *o, const scene_result *results, int scene_count,
                           const int selected[VARIANT_COUNT], const char *chart_note)
 {
     if (!o->ray_kind_enabled[RAYS_PRIMARY] || o->accuracy_rays == 0)
         return;
-    printf("\n=== run time against error: primary rays, %u thread%s (%s)\n", o->thread_counts[0],
-           o->thread_counts[0] == 1 ? "" : "s", chart_note);
+    printf("\n=== run time against error: primary rays, %u thread%s; *: round curves, against the tube reference (%s)\n",
+           o->thread_counts[0], o->thread_counts[0] == 1 ? "" : "s", chart_note);
     printf("%-12s %-20s %-10s %-12s %-10s\n", "scene", "variant", "Mrays/s", "disagree %", "|dt|/r p99");
     for (int s = 0; s < scene_count; s++) {
         if (!results[s].loaded)
@@ -345,7 +359,7 @@ void print_tradeoff_table(const options *o, const scene_result *results, int sce
         int first = 1;
         for (int i = 0; i < VARIANT_COUNT; i++) {
             const variant_result *r = &results[s].variants[i];
-            if (!selected[i] || !all_variants[i].on_chart || !r->has_accuracy)
+            if (!selected[i] || !variant_on_chart(&all_variants[i], results[s].basis) || !r->has_accuracy)
                 continue;
             printf("%-12s %-20s %-10.2f %-12.4f %-10.2e\n", first ? results[s].name : "", all_variants[i].label,
                    r->mrays[RAYS_PRIMARY][0].median, disagreement_percent(&r->accuracy), r->accuracy.t_p99);

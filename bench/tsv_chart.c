@@ -84,7 +84,11 @@ void tsv_write_scene(FILE *f, const options *o, const scene_result *sr, const in
             for (int t = 0; t < o->thread_count_count; t++)
                 tsv_number(f, "\t%.4f", r->mrays[k][t].median);
         tsv_accuracy(f, r->has_accuracy ? &r->accuracy : NULL);
-        fprintf(f, "\t%d\t%s", variant_comparable(v, sr->basis), v->on_chart ? (hairobb ? "hairobb" : "embree") : "-");
+        /* the chart's series: ribbons, and tubes against the tube reference apart */
+        const char *series = !variant_on_chart(v, sr->basis) ? "-"
+                             : variant_is_tube(v) ? (hairobb ? "hairobb-round" : "embree-round")
+                                                  : (hairobb ? "hairobb" : "embree");
+        fprintf(f, "\t%d\t%s", variant_comparable(v, sr->basis), series);
         for (int k = 0; k < RAY_KIND_COUNT; k++)
             for (int t = 0; t < o->thread_count_count; t++) {
                 tsv_number(f, "\t%.4f", r->mrays[k][t].min);
@@ -106,7 +110,7 @@ static int has_chart_points(const scene_result *sr, const int selected[VARIANT_C
 {
     for (int i = 0; i < VARIANT_COUNT; i++) {
         const variant_result *r = &sr->variants[i];
-        if (sr->loaded && selected[i] && all_variants[i].on_chart && r->has_accuracy &&
+        if (sr->loaded && selected[i] && variant_on_chart(&all_variants[i], sr->basis) && r->has_accuracy &&
             isfinite(r->mrays[RAYS_PRIMARY][0].median))
             return 1;
     }
@@ -142,8 +146,8 @@ const char *draw_chart(const options *o, const scene_result *results, int scene_
         return note;
     }
     if (!*scenes) {
-        snprintf(note, note_size, "no chart: it needs primary rays, accuracy rays and a precision or Embree flat "
-                                  "variant");
+        snprintf(note, note_size, "no chart: it needs primary rays, accuracy rays and a precision, Embree flat or "
+                                  "round variant");
         return note;
     }
     if (access(o->plot_script, R_OK) != 0) {

@@ -46,9 +46,10 @@ const variant all_variants[] = {
     /* the defaults without the copy (bezier_copy OFF): the caller's arrays read where they are */
     {"no-copy", "hairobb no copy", LIB_HAIROBB, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 8, HAIROBB_AUTO,
      HAIROBB_AUTO, 0, 0, 1, 0, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_BEZIER, HAIROBB_OFF, 0, HAIROBB_SHAPE_RIBBON},
-    /* round curves (tubes): the peer of embree-round, not of the ribbon reference */
+    /* round curves (tubes): the peer of embree-round, not of the ribbon
+       reference; on the chart against the tube reference */
     {"round", "hairobb round *", LIB_HAIROBB, HAIROBB_NODES_MIXED, HAIROBB_OBB_DEFAULT, HAIROBB_PRECISION_EXACT, 8, HAIROBB_AUTO,
-     HAIROBB_AUTO, 0, 0, 0, 0, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_BEZIER, HAIROBB_AUTO, 0, HAIROBB_SHAPE_ROUND},
+     HAIROBB_AUTO, 0, 0, 0, 1, 0, 0, HAIROBB_SIMD_AUTO, HAIROBB_BASIS_BEZIER, HAIROBB_AUTO, 0, HAIROBB_SHAPE_ROUND},
     HAIROBB_BASIS_ROW("catmull-rom", "hairobb C-R no copy", CATMULL_ROM, OFF),
     HAIROBB_BASIS_ROW("catmull-rom-copy", "hairobb C-R + copy", CATMULL_ROM, ON),
     HAIROBB_BASIS_ROW("b-spline", "hairobb B-sp no copy", BSPLINE, OFF),
@@ -64,7 +65,10 @@ const variant all_variants[] = {
        flat Bezier curves on a Bezier scene) */
     EMBREE_ROW("embree-compact", "Embree compact r4", EMB_FLAT_BEZIER, 4, RTC_SCENE_FLAG_COMPACT, 1, 0),
     EMBREE_ROW("embree-cycles", "Embree Cycles r5", EMB_FLAT_BEZIER, 5, RTC_SCENE_FLAG_ROBUST, 1, 0),
-    EMBREE_ROW("embree-round", "Embree round *", EMB_ROUND_BEZIER, 0, 0, 0, 0),
+    /* Embree's round curves, the peers of round: its default mode (on the
+       chart) and its robust traversal */
+    EMBREE_ROW("embree-round", "Embree round *", EMB_ROUND_BEZIER, 0, 0, 0, 1),
+    EMBREE_ROW("embree-round-robust", "Embree round rob. *", EMB_ROUND_BEZIER, 0, RTC_SCENE_FLAG_ROBUST, 0, 0),
     /* Embree's default limited to its AVX2 kernels (where the CPU has AVX-512) */
     EMBREE_ROW("embree-avx2", "Embree r4 AVX2 only", EMB_FLAT_BEZIER, 4, EMB_FLAG_ISA_AVX2, 1, 0),
 };
@@ -76,15 +80,15 @@ typedef char variant_table_has_VARIANT_COUNT_rows[sizeof all_variants / sizeof a
 static const struct { const char *name, *members; } variant_groups[] = {
     {"all", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
             "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2,no-copy,round,embree-r4,embree-r8,embree-r16,"
-            "embree-compact,embree-cycles,embree-round,embree-avx2"},
+            "embree-compact,embree-cycles,embree-round,embree-round-robust,embree-avx2"},
     {"hairobb", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
                 "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2,no-copy,round"},
-    {"embree", "embree-r4,embree-r8,embree-r16,embree-compact,embree-cycles,embree-round,embree-avx2"},
+    {"embree", "embree-r4,embree-r8,embree-r16,embree-compact,embree-cycles,embree-round,embree-round-robust,embree-avx2"},
     {"precision", "default,exact4,exact16,pieces4,pieces8,pieces16"},
     {"ablation", "aabb,obb,mixed-uncompressed,spatial,spatial-compressed,spatial-compressed-cluster,shared,compressed-shared,default"},
     {"mixed", "default"},
     /* round curves: hairobb's tubes and Embree's, and the ribbons of both */
-    {"tubes", "round,embree-round,default,embree-r4"},
+    {"tubes", "round,embree-round,embree-round-robust,default,embree-r4"},
     {"bases", "default,catmull-rom,catmull-rom-copy,b-spline,b-spline-copy"},
     /* a Catmull-Rom scene (yeti) without --variants: hairobb without the copy, Embree on the same buffers
        (embree-cycles: Cycles' own curves there, flat Catmull-Rom) */
@@ -92,6 +96,12 @@ static const struct { const char *name, *members; } variant_groups[] = {
     /* --scene scale without --variants: the defaults (the copy, and without it) against Embree's
        default and its compact mode */
     {"scale", "default,no-copy,embree-r4,embree-compact"},
+};
+
+const peer_pair peer_pairs[PEER_PAIR_COUNT] = {
+    {"no-copy", "embree-compact"},
+    {"round", "embree-round"},
+    {"round", "embree-round-robust"},
 };
 
 int variant_index(const char *key)
@@ -166,6 +176,13 @@ int variant_comparable(const variant *v, scene_basis basis)
     if (basis == SCENE_BASIS_CATMULL_ROM && v->lib == LIB_HAIROBB)   /* its own basis or the Bezier default (made C-R) */
         return v->basis == HAIROBB_BASIS_BEZIER || v->basis == HAIROBB_BASIS_CATMULL_ROM;
     return v->accuracy_comparable;
+}
+
+/* A point of the run time against error chart on this scene: a chart row
+   whose errors measure its accuracy (not a round row on a Catmull-Rom scene). */
+int variant_on_chart(const variant *v, scene_basis basis)
+{
+    return v->on_chart && variant_comparable(v, basis);
 }
 
 /* The hairobb variant whose BVH spawns the secondary rays (and is kept for
@@ -275,7 +292,7 @@ int build_and_record(workload *w, const variant *v, built_accel *accel, variant_
 {
     for (int k = 0; k < RAY_KIND_COUNT; k++)
         for (int t = 0; t < MAX_THREAD_COUNTS; t++)
-            r->mrays[k][t] = r->ratio[k][t] = r->peer_ratio[k][t] = (spread){NAN, NAN, NAN};
+            r->mrays[k][t] = r->ratio[k][t] = (spread){NAN, NAN, NAN};
     progress_start("  %s: build", v->label);
     int adopted = w->default_bvh && v == &all_variants[spawn_variant(&w->scene)];
     if (!adopted && !memory_fits(estimated_build_bytes(v, &w->scene), "the build", r->skipped, sizeof r->skipped)) {
