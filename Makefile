@@ -166,7 +166,7 @@ BENCH_FLAGS_bench_profile = -fno-pie -no-pie
 # what it shares with the tests: BENCH_TEST_HEADERS)
 BENCH_SOURCES = bench/bench.c bench/options.c bench/variants.c bench/memory.c bench/scenes.c bench/layout.c bench/harness.c \
                 bench/accuracy.c bench/report.c bench/tsv_chart.c bench/mode_scenes.c bench/mode_builds.c \
-                bench/mode_motion.c bench/mode_animate.c bench/mode_save_load.c bench/progress.c
+                bench/mode_motion.c bench/mode_animate.c bench/mode_save_load.c bench/mode_groups.c bench/progress.c
 BENCH_TEST_HEADERS = tests/compare.h tests/embree_wrap.h tests/random.h tests/reference.h tests/ref_tube.h tests/scenes.h \
                      tests/test_alloc.h tests/test_data.h
 $(B)/bench $(B)/bench_counted $(B)/bench_profile: $(BENCH_SOURCES) bench/bench.h hairobb.h $(BENCH_TEST_HEADERS) | $(B) deps

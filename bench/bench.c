@@ -46,5 +46,7 @@ int main(int argc, char **argv)
         return run_motion(&o);
     if (o.builds)
         return run_builds(&o);
+    if (o.groups)
+        return run_groups(&o);
     return run_scenes(&o, selected);
 }

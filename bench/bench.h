@@ -19,6 +19,7 @@
      mode_motion.c     --motion: motion blur against Embree
      mode_animate.c    --animate N: refit against rebuild over an animation
      mode_save_load.c  --save-load: save and load against build
+     mode_groups.c     --groups: one BVH against the same hair as a scene of 4-64 groups
      bench.c           main: the options, then one mode
 
    What the bench shares with the tests comes from tests/: the scenes
@@ -119,6 +120,7 @@ typedef struct options {
     int save_load_count;
     int motion;                     /* --motion: the motion blur study alone */
     int builds;                     /* --builds: the build-time study alone */
+    int groups;                     /* --groups: one BVH against the same hair in groups under a scene, alone */
 } options;
 
 /* A scene's arrays as the bench handed them over (layout.c) */
@@ -341,6 +343,7 @@ void rss_step_end(rss_step *r);
 /* layout.c */
 int huge_pages_supported(void);
 int arrange_scene(const options *o, hair_scene *s, int from_file, scene_layout *layout);
+size_t *find_strands(const hair_scene *s, size_t *strand_count);
 const char *layout_order_text(const scene_layout *l);
 const char *layout_memory_text(const scene_layout *l, char *text, size_t size);
 
@@ -422,5 +425,6 @@ int run_builds(const options *o);                                    /* mode_bui
 int run_motion(const options *o);                                    /* mode_motion.c */
 int run_animation(const options *o, int frames);                     /* mode_animate.c */
 int run_save_load(const options *o);                                 /* mode_save_load.c */
+int run_groups(const options *o);                                    /* mode_groups.c */
 
 #endif /* HAIROBB_BENCH_H */

@@ -110,8 +110,9 @@ static int starts_strand(const hair_scene *s, size_t i)
 }
 
 /* The first segment of each strand, and one past the last: strand k is
-   segments [first[k], first[k + 1]). NULL when out of memory. */
-static size_t *find_strands(const hair_scene *s, size_t *strand_count)
+   segments [first[k], first[k + 1]). NULL when out of memory (the caller
+   frees it; --groups splits a scene at these). */
+size_t *find_strands(const hair_scene *s, size_t *strand_count)
 {
     size_t count = 0;
     for (size_t i = 0; i < s->segment_count; i++)

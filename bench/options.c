@@ -84,6 +84,15 @@ static void print_help(void)
            "                      arrays: build s, bytes/segment, primary and incoherent Mrays/s at random ray\n"
            "                      times (--res, --rounds, --threads), accuracy at 8 times (--accuracy-rays),\n"
            "                      TSV (--tsv, one row a motion and library)\n");
+    printf("  --groups            only several hair groups (SCENES): each --scene (default combed and combed:2M)\n"
+           "                      traced as one BVH and as a hairobb_scene over its strands split in array order\n"
+           "                      into 4, 16 and 64 groups (a BVH each, identity maps), plus one BVH under a\n"
+           "                      scene alone and 16 translated instances of one group (other hair: its speed\n"
+           "                      alone); in groom order (groups interleaved in space) and in space order\n"
+           "                      (groups as patches) unless --strand-order picks one; build s, bytes/segment,\n"
+           "                      instance boxes a primary ray crosses, Mrays/s and ratios to the one BVH\n"
+           "                      within rounds (--rays, --threads, --rounds, --res), and each group scene's\n"
+           "                      hits against the one BVH's on every ray\n");
     printf("  --strand-order O    the order of the strands in the scene's arrays: groom (shuffled whole with a\n"
            "                      fixed seed, as a groom generator writes them and a renderer hands them over; the\n"
            "                      default for procedural scenes), space (sorted by the Morton code of their roots),\n"
@@ -231,7 +240,7 @@ int parse_options(int argc, char **argv, options *o)
     /* the options that take no value */
     const struct { const char *name; int *set; } switches[] = {
         {"--quiet", &o->quiet}, {"--profile", &o->profile}, {"--motion", &o->motion}, {"--builds", &o->builds},
-        {"--huge-pages", &o->huge_pages}};
+        {"--huge-pages", &o->huge_pages}, {"--groups", &o->groups}};
     default_options(o);
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i], *value = NULL;
@@ -322,6 +331,10 @@ int parse_options(int argc, char **argv, options *o)
     if (o->huge_pages && !huge_pages_supported()) {
         fprintf(stderr, "bench: --huge-pages needs Linux's madvise(MADV_HUGEPAGE), which this system lacks\n");
         return 1;
+    }
+    if (o->scene_count == 0 && o->groups) { /* --groups: combed at --segments and at 2M */
+        add_scene(o, "combed", 0, 0);
+        add_scene(o, "combed", 2000000, 0);
     }
     if (o->scene_count == 0)
         add_scene(o, "combed", 0, 0);
