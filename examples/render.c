@@ -3,10 +3,11 @@
    Kajiya-Kay shading under two directional lights with ray-traced shadows
    through translucent hair (a hit filter), a PNG out.
 
-       render [file.hair] [-o out.png] [-w width] [-h height] [--round]
+       render [file.hair] [-o out.png] [-w width] [-h height] [-z zoom] [--round]
 
    --round traces the hair as round curves (tubes, HAIROBB_SHAPE_ROUND)
-   instead of ray-facing ribbons.
+   instead of ray-facing ribbons; -z narrows the field of view zoom times
+   about the middle of the hair's box, for a close-up.
 
    Build: cc -std=c99 -O2 -I. examples/render.c -o render -lm -pthread
    (needs stb_image_write.h: Debian's libstb-dev). */
@@ -97,7 +98,7 @@ static void make_fur(scene *sc, unsigned strands, unsigned segs)
 /* The camera and what every row worker reads. */
 static struct {
     const hairobb_bvh *bvh; const scene *sc;
-    int w, h; float eye[3], fwd[3], right[3], up[3];
+    int w, h; float eye[3], fwd[3], right[3], up[3], fov;   /* fov: half the image's height at distance 1 */
     float light[2][3], light_color[2][3];
     unsigned char *pixels;
     pthread_mutex_t lock; int next_row, rows_done; long rays, hits;
@@ -211,7 +212,7 @@ static void *worker(void *arg)
             for (j = 0; j < SS; j++)
                 for (i = 0; i < SS; i++) {
                     float sx = ((x + (i + 0.5f) / SS) / R.w * 2 - 1) * R.w / R.h, sy = 1 - (y + (j + 0.5f) / SS) / R.h * 2;
-                    for (k = 0; k < 3; k++) d[k] = R.fwd[k] + 0.45f * (sx * R.right[k] + sy * R.up[k]);  /* ~48 deg field of view */
+                    for (k = 0; k < 3; k++) d[k] = R.fwd[k] + R.fov * (sx * R.right[k] + sy * R.up[k]);
                     norm3(d);
                     shade(d, c, &rays, &hit_any);
                     for (k = 0; k < 3; k++) sum[k] += c[k] / (SS * SS);
@@ -247,15 +248,18 @@ int main(int argc, char **argv)
 
     memset(&R, 0, sizeof R); memset(&sc, 0, sizeof sc); memset(&hair, 0, sizeof hair);
     R.w = R.h = 800;
+    R.fov = 0.45f;   /* ~48 deg field of view */
     for (a = 1; a < argc; a++) {
         if (!strcmp(argv[a], "-o") && a + 1 < argc) out = argv[++a];
         else if (!strcmp(argv[a], "-w") && a + 1 < argc) R.w = atoi(argv[++a]);
         else if (!strcmp(argv[a], "-h") && a + 1 < argc) R.h = atoi(argv[++a]);
+        else if (!strcmp(argv[a], "-z") && a + 1 < argc) R.fov = 0.45f / (float)atof(argv[++a]);
         else if (!strcmp(argv[a], "--round")) round = 1;
         else if (argv[a][0] != '-' && !in) in = argv[a];
-        else { fprintf(stderr, "usage: %s [file.hair] [-o out.png] [-w width] [-h height] [--round]\n", argv[0]); return 2; }
+        else { fprintf(stderr, "usage: %s [file.hair] [-o out.png] [-w width] [-h height] [-z zoom] [--round]\n", argv[0]); return 2; }
     }
     if (R.w <= 0 || R.h <= 0 || R.w > 16384 || R.h > 16384) { fprintf(stderr, "bad image size\n"); return 2; }
+    if (!(R.fov > 0 && R.fov <= 0.45f)) { fprintf(stderr, "bad zoom (1 or more)\n"); return 2; }
 
     if (in) {   /* the file's Bezier segments and colours are ready to use as they are */
         if ((res = hairobb_hair_load(in, NULL, &hair)) != HAIROBB_OK) {
