@@ -6140,24 +6140,6 @@ static int hairobb__ray_setup_from(hairobb__ray_state *rs, const hairobb_bvh *bv
     return 1;
 }
 
-/* A hit in an instance's object space taken to world space: the tangent
-   by the map, the normal by its inverse transposed; t, u, v are the same. */
-static void hairobb__hit_to_world(const hairobb__placed *placed, uint32_t id, hairobb_hit *hit)
-{
-    const float *m = placed->to_world, *inv = placed->to_object;
-    float tangent[3], n[3], length;
-    int i;
-    for (i = 0; i < 3; ++i) {
-        tangent[i] = m[4 * i] * hit->tangent[0] + m[4 * i + 1] * hit->tangent[1] + m[4 * i + 2] * hit->tangent[2];
-        n[i] = inv[i] * hit->Ng[0] + inv[4 + i] * hit->Ng[1] + inv[8 + i] * hit->Ng[2];
-    }
-    length = sqrtf(hairobb__dot3(n, n));
-    if (length > 0.0f && length < INFINITY)
-        for (i = 0; i < 3; ++i) hit->Ng[i] = n[i] / length;
-    memcpy(hit->tangent, tangent, sizeof tangent);
-    hit->instance_id = id;
-}
-
 #endif /* !HAIROBB__KERNEL_PASS */
 
 /* ======================================================================== */
@@ -6966,6 +6948,24 @@ static float hairobb__ribbon_f(const hairobb__ray_poly *c, float u, float *deriv
         *derivative = squares[0] + squares[1] + second[0] + second[1];
     }
     return products[0] + products[1];
+}
+
+/* A hit in an instance's object space taken to world space: the tangent
+   by the map, the normal by its inverse transposed; t, u, v are the same. */
+static void hairobb__hit_to_world(const hairobb__placed *placed, uint32_t id, hairobb_hit *hit)
+{
+    const float *m = placed->to_world, *inv = placed->to_object;
+    float tangent[3], n[3], length;
+    int i;
+    for (i = 0; i < 3; ++i) {
+        tangent[i] = m[4 * i] * hit->tangent[0] + m[4 * i + 1] * hit->tangent[1] + m[4 * i + 2] * hit->tangent[2];
+        n[i] = inv[i] * hit->Ng[0] + inv[4 + i] * hit->Ng[1] + inv[8 + i] * hit->Ng[2];
+    }
+    length = sqrtf(hairobb__dot3(n, n));
+    if (length > 0.0f && length < INFINITY)
+        for (i = 0; i < 3; ++i) hit->Ng[i] = n[i] / length;
+    memcpy(hit->tangent, tangent, sizeof tangent);
+    hit->instance_id = id;
 }
 
 /* Records the hit if the ribbon point (x, y) covers the ray axis within
@@ -8408,6 +8408,7 @@ HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairob
 #define hairobb__hit_at hairobb__hit_at_avx2
 #define hairobb__tube_hit_at hairobb__tube_hit_at_avx2
 #define hairobb__hit_filtered_out hairobb__hit_filtered_out_avx2
+#define hairobb__hit_to_world hairobb__hit_to_world_avx2
 #define hairobb__ignored_before hairobb__ignored_before_avx2
 #define hairobb__shares_end hairobb__shares_end_avx2
 #define hairobb__horner hairobb__horner_avx2
