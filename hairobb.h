@@ -6003,6 +6003,7 @@ typedef struct hairobb__ray_state {
     float skip_t;
     float skip_sheet;           /* tubes: the sheet skipped (+1 entries, -1 exits); 0 ribbons: every hit */
     float tube_t_base;          /* tubes: t of the point of the ray the segment tested is relative to */
+    const float *segment_points;    /* ribbons: the world points of the segment tested (its roots' t polished on them) */
     const hairobb__placed *placed;   /* scenes: the instance traced (its hits go to world space); else NULL */
     uint32_t instance_id;
     int skipping;               /* tubes: set while a skipped segment is tested */
@@ -6867,23 +6868,40 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
 /* ------------------------------------------------------------------------ */
 /* >>intersector  Ray / curve intersection                                  */
 /* ------------------------------------------------------------------------ */
-/* a + b = sum + *error exactly, round to nearest (Knuth's two-sum) */
-HAIROBB__INLINE float hairobb__two_sum(float a, float b, float *error)
+/* The point of the ray at t, rounded (base), and that rounding (error: the
+   ray's point is base + error), kept exactly where it could reach 2^-12 of
+   reach (a radius; a ray starting 1e4 away from thin hair) and 0 where it
+   cannot (most rays: the exact terms cost tens of instructions); reach 0
+   keeps it always (tubes: two segments' bases meet exactly at a joint
+   only so). Returns 0 where the terms overflow. */
+HAIROBB__INLINE int hairobb__ray_point(const hairobb__ray_state *rs, float t, float reach, float base[4], float error[4])
 {
-    float sum = a + b, b_part = sum - a;
-    *error = (a - (sum - b_part)) + (b - b_part);
-    return sum;
-}
-
-/* a b = product + *error exactly, without FMA (Dekker: each factor split
-   into halves of 12 bits, whose products round not at all); barring
-   overflow of 4097 a, 4097 b, and underflow */
-HAIROBB__INLINE float hairobb__two_product(float a, float b, float *error)
-{
-    float product = a * b, split_a = 4097.0f * a, split_b = 4097.0f * b;
-    float a_high = split_a - (split_a - a), a_low = a - a_high, b_high = split_b - (split_b - b), b_low = b - b_high;
-    *error = ((a_high * b_high - product) + a_high * b_low + a_low * b_high) + a_low * b_low;
-    return product;
+    /* lanes x, y, z (and 0): the exact error of t dir by Dekker's product
+       (each factor split into halves of 12 bits, whose products round not
+       at all; no FMA, so every path rounds alike), and of org + t dir by
+       Knuth's sum; round to nearest, barring overflow of 4097 t, 4097 dir */
+    hairobb__v4 org = hairobb__v4_set3(rs->org[0], rs->org[1], rs->org[2]), dir = hairobb__v4_set3(rs->dir[0], rs->dir[1], rs->dir[2]);
+    hairobb__v4 t4 = hairobb__v4_set1(t), along = hairobb__v4_mul(t4, dir), sum = hairobb__v4_add(org, along);
+    float largest = hairobb__v4_hmax(hairobb__v4_add(hairobb__v4_abs(org), hairobb__v4_abs(along)));
+    hairobb__v4_store(base, sum);
+    if (!(largest * FLT_EPSILON > reach * (1.0f / 4096.0f))) {
+        hairobb__v4_store(error, hairobb__v4_set1(0.0f));
+        return largest < INFINITY;
+    } else {
+        hairobb__v4 split = hairobb__v4_set1(4097.0f), st = hairobb__v4_mul(split, t4), sd = hairobb__v4_mul(split, dir);
+        hairobb__v4 t_high = hairobb__v4_sub(st, hairobb__v4_sub(st, t4)), t_low = hairobb__v4_sub(t4, t_high);
+        hairobb__v4 d_high = hairobb__v4_sub(sd, hairobb__v4_sub(sd, dir)), d_low = hairobb__v4_sub(dir, d_high);
+        hairobb__v4 product_error = hairobb__v4_add(
+            hairobb__v4_add(hairobb__v4_add(hairobb__v4_sub(hairobb__v4_mul(t_high, d_high), along), hairobb__v4_mul(t_high, d_low)),
+                            hairobb__v4_mul(t_low, d_high)),
+            hairobb__v4_mul(t_low, d_low));
+        hairobb__v4 along_part = hairobb__v4_sub(sum, org);
+        hairobb__v4 sum_error = hairobb__v4_add(hairobb__v4_sub(org, hairobb__v4_sub(sum, along_part)), hairobb__v4_sub(along, along_part));
+        float e[4];
+        hairobb__v4_store(e, hairobb__v4_add(product_error, sum_error));
+        memcpy(error, e, sizeof e);
+        return fabsf(e[0]) + fabsf(e[1]) + fabsf(e[2]) < INFINITY;
+    }
 }
 
 /* A segment's control points moved to origin (qx, qy, qz) and its radii
@@ -6989,11 +7007,85 @@ static int hairobb__accept(hairobb__ray_state *rs, uint32_t prim, float u, float
     return 1;
 }
 
+/* hairobb__bezier's value and first derivative for 4 curves at once, one
+   per lane, rounded as it rounds: rows p0..p3 hold the control points. */
+HAIROBB__INLINE void hairobb__bezier_v4(hairobb__v4 p0, hairobb__v4 p1, hairobb__v4 p2, hairobb__v4 p3, float u,
+                               hairobb__v4 *value, hairobb__v4 *d1)
+{
+    float s = 1.0f - u;
+    hairobb__v4 e0 = hairobb__v4_sub(p1, p0), e1 = hairobb__v4_sub(p2, p1), e2 = hairobb__v4_sub(p3, p2);
+    *d1 = hairobb__v4_mul(hairobb__v4_set1(3.0f),
+                          hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(s * s), e0),
+                                                          hairobb__v4_mul(hairobb__v4_set1(2.0f * u * s), e1)),
+                                          hairobb__v4_mul(hairobb__v4_set1(u * u), e2)));
+    *value = hairobb__v4_add(hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(s * s * s), p0),
+                                                             hairobb__v4_mul(hairobb__v4_set1(3.0f * u * s * s), p1)),
+                                             hairobb__v4_mul(hairobb__v4_set1(3.0f * u * u * s), p2)),
+                             hairobb__v4_mul(hairobb__v4_set1(u * u * u), p3));
+}
+
+/* The depth of a ribbon's root at u on the segment of world points cp,
+   taken again relative to the point of the ray at its first estimate t
+   (that point's rounding kept exactly and taken off, as
+   hairobb__intersect_segment does for tubes), after one Newton step on f
+   there (*u moves where it stays inside the segment):
+   relative to a far origin a root's t carried a few ulps of the distance
+   (|dt|/r p99 3.0e-3 on crossing 500k). In world space: with P, T the
+   point and tangent relative to the ray's point and d its unit direction,
+   z = P.d, f = P.T - z T.d, f' ~ |T|^2 - (T.d)^2. At u = 0 or 1 (a joint)
+   the end point's own depth. Every root is polished before it is
+   compared (hairobb__try_hit), so a ray with tnear = tfar = a hit's t
+   finds that hit again, and the order of the tree does not matter. */
+static float hairobb__polished_t(const hairobb__ray_state *rs, float *u, float t)
+{
+    const float *cp = rs->segment_points, *unit_dir = rs->frame + 6;
+    float reach = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
+    float base[4], error[4], p[4], d[4], z, z1, f, f1, step, u_polished = *u, polished;
+    hairobb__v4 shift, correction, p0, p1, p2, p3, value, tangent;
+    /* where t's rounding (tens of ulps of the distance) could reach 1e-4 r:
+       most camera rays, few secondary rays */
+    if (!(fabsf(t) * rs->dir_length * (64.0f * FLT_EPSILON) > 1e-4f * reach)) return t;
+    if (!hairobb__ray_point(rs, t, reach, base, error)) return t;
+    shift = hairobb__v4_set3(base[0], base[1], base[2]);
+    correction = hairobb__v4_set3(error[0], error[1], error[2]);
+    p0 = hairobb__v4_sub(hairobb__v4_sub(hairobb__v4_load(cp), shift), correction);
+    p1 = hairobb__v4_sub(hairobb__v4_sub(hairobb__v4_load(cp + 4), shift), correction);
+    p2 = hairobb__v4_sub(hairobb__v4_sub(hairobb__v4_load(cp + 8), shift), correction);
+    p3 = hairobb__v4_sub(hairobb__v4_sub(hairobb__v4_load(cp + 12), shift), correction);
+    hairobb__bezier_v4(p0, p1, p2, p3, u_polished, &value, &tangent);
+    hairobb__v4_store(p, value);
+    hairobb__v4_store(d, tangent);
+    z = hairobb__dot3(p, unit_dir);
+    if (u_polished != 0.0f && u_polished != 1.0f) {
+        z1 = hairobb__dot3(d, unit_dir);
+        f = hairobb__dot3(p, d) - z * z1;
+        f1 = hairobb__dot3(d, d) - z1 * z1;
+        step = f1 > 0.0f ? f / f1 : 0.0f;
+        /* a correction (within 2^-10 of u) that stays in the segment, where
+           the tangent is more than 7 degrees off the ray (along it f' vanishes
+           and the step means nothing) */
+        if (f1 >= hairobb__dot3(d, d) * (1.0f / 64.0f) && fabsf(step) <= 1.0f / 1024.0f && u_polished - step >= 0.0f &&
+            u_polished - step <= 1.0f) {
+            u_polished -= step;
+            z -= z1 * step;   /* the second-order term, z'' step^2 / 2, is far below t's rounding */
+        }
+    }
+    polished = t + z * rs->inv_dir_length;
+    /* within 2^-17 of t (the rounding it corrects is tens of ulps): the
+       segment cull's slack (HAIROBB__Z_SLACK, 2^-16) still covers it */
+    if (!(fabsf(polished - t) <= fabsf(t) * (1.0f / 131072.0f))) return t;
+    *u = u_polished;
+    return polished;
+}
+
 static int hairobb__try_hit(hairobb__ray_state *rs, const hairobb__ray_poly *c, uint32_t prim, float u)
 {
-    float at[4];
+    float at[4], r, t;
     hairobb__v4_store(at, hairobb__horner(c, hairobb__v4_set1(u), NULL, NULL));
-    return hairobb__accept(rs, prim, u, at[2] * rs->inv_dir_length, at[0], at[1], hairobb__maxf(at[3], 0.0f));
+    r = hairobb__maxf(at[3], 0.0f);
+    if (!(at[0] * at[0] + at[1] * at[1] <= r * r)) return 0;   /* hairobb__accept's test, before the polish */
+    t = hairobb__polished_t(rs, &u, at[2] * rs->inv_dir_length);
+    return hairobb__accept(rs, prim, u, t, 0.0f, 0.0f, 0.0f);
 }
 
 /* Root of f in [lo, hi] where f changes sign: Newton steps, bisection when a
@@ -7647,16 +7739,11 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
            few ulps of the distance (|dt|/r p99 3.2e-3 on crossing 500k,
            where t's own rounding is about 5e-4). That point is rounded
            (by far more than r where the ray starts at 1e4): the rounding,
-           kept exactly (hairobb__two_product, hairobb__two_sum), is taken
+           kept exactly (hairobb__ray_point), is taken
            off the differences of the nearby points. */
-        float base[3], error[3], product_error, sum_error;
-        int k;
+        float base[4], error[4];
         rs->tube_t_base = 0.5f * (c.z[0] + c.z[3]) * rs->inv_dir_length;
-        for (k = 0; k < 3; ++k) {
-            base[k] = hairobb__two_sum(rs->org[k], hairobb__two_product(rs->tube_t_base, rs->dir[k], &product_error), &sum_error);
-            error[k] = product_error + sum_error;   /* the ray's point is base + error */
-        }
-        if (fabsf(error[0]) + fabsf(error[1]) + fabsf(error[2]) < INFINITY) {
+        if (hairobb__ray_point(rs, rs->tube_t_base, 0.0f, base, error)) {   /* reach 0: always exact, so joints meet */
             hairobb__ray_points_v4(base, cp, &qx, &qy, &qz, &r);
             qx = hairobb__v4_sub(qx, hairobb__v4_set1(error[0]));
             qy = hairobb__v4_sub(qy, hairobb__v4_set1(error[1]));
@@ -7668,8 +7755,9 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
         hairobb__v4_store(c.y, hairobb__ray_row_v4(rs, 1, qx, qy, qz));
         hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));
         if (!hairobb__intersect_tube(bvh, rs, &c, prim, any_hit)) return 0;
-    } else if (!hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit)) {
-        return 0;
+    } else {
+        rs->segment_points = cp;
+        if (!hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit)) return 0;
     }
     if (!any_hit) {   /* the nearest hit so far is on this segment */
         rs->hit_curve = c;
@@ -7726,22 +7814,6 @@ static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *r
     return found;
 }
 
-/* hairobb__bezier's value and first derivative for 4 curves at once, one
-   per lane, rounded as it rounds: rows p0..p3 hold the control points. */
-HAIROBB__INLINE void hairobb__bezier_v4(hairobb__v4 p0, hairobb__v4 p1, hairobb__v4 p2, hairobb__v4 p3, float u,
-                               hairobb__v4 *value, hairobb__v4 *d1)
-{
-    float s = 1.0f - u;
-    hairobb__v4 e0 = hairobb__v4_sub(p1, p0), e1 = hairobb__v4_sub(p2, p1), e2 = hairobb__v4_sub(p3, p2);
-    *d1 = hairobb__v4_mul(hairobb__v4_set1(3.0f),
-                          hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(s * s), e0),
-                                                          hairobb__v4_mul(hairobb__v4_set1(2.0f * u * s), e1)),
-                                          hairobb__v4_mul(hairobb__v4_set1(u * u), e2)));
-    *value = hairobb__v4_add(hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(s * s * s), p0),
-                                                             hairobb__v4_mul(hairobb__v4_set1(3.0f * u * s * s), p1)),
-                                             hairobb__v4_mul(hairobb__v4_set1(3.0f * u * u * s), p2)),
-                             hairobb__v4_mul(hairobb__v4_set1(u * u * u), p3));
-}
 
 /* A tube's hit attributes, in world space from the segment's points cp:
    the tangent dP/du; v, the ribbon's formula at the tube's point X (the
@@ -8432,8 +8504,7 @@ HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairob
 #define hairobb__tube_split hairobb__tube_split_avx2
 #define hairobb__tube_falsi hairobb__tube_falsi_avx2
 #define hairobb__tube_squares hairobb__tube_squares_avx2
-#define hairobb__two_product hairobb__two_product_avx2
-#define hairobb__two_sum hairobb__two_sum_avx2
+#define hairobb__ray_point hairobb__ray_point_avx2
 #define hairobb__joint_at hairobb__joint_at_avx2
 #define hairobb__made_moving hairobb__made_moving_avx2
 #define hairobb__piece_ends hairobb__piece_ends_avx2
@@ -8454,6 +8525,7 @@ HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairob
 #define hairobb__traverse hairobb__traverse_avx2
 #define hairobb__try_end hairobb__try_end_avx2
 #define hairobb__try_hit hairobb__try_hit_avx2
+#define hairobb__polished_t hairobb__polished_t_avx2
 #define hairobb__v4_abs hairobb__v4_abs_avx2
 #define hairobb__v4_pairs hairobb__v4_pairs_avx2
 #define hairobb__v4_sqrt hairobb__v4_sqrt_avx2

@@ -305,9 +305,13 @@ int main(void)
             flat_hair g = f;
             memset(g.instance, 0, sizeof(uint32_t) * f.segment_count);
             for (i = 0; i < (int)f.segment_count; ++i) g.prim[i] = (uint32_t)i;
+            /* shown, not barred beyond compare's 2e-3: a scene's ray also
+               carries its origin mapped into object space and rounded, half
+               an ulp of up to 24 units in each coordinate (1.7e-6 in all),
+               up to 1.7e-3 of the 0.001 tip radius, so no bar between the
+               project's and this one BVH's (2e-4 on these rays) is derived */
             double p99_one = compare("the same hair in one BVH", one, NULL, &g, 0, 40000, 11);
-            CHECK(p99_scene <= 1.25 * p99_one, "instances less accurate than one BVH over the same hair: |dt|/r p99 %.2e against %.2e",
-                  p99_scene, p99_one);
+            printf("|dt|/r p99: %.2e in the scene, %.2e in one BVH over the same hair\n", p99_scene, p99_one);
         }
         hairobb_scene_free(one);
         hairobb_free((hairobb_bvh *)whole.bvh);
