@@ -7397,6 +7397,62 @@ static void hairobb__tube_at(const hairobb__ray_poly *p, float u, float out[HAIR
     out[7] = q + 2.0f * r * r;
 }
 
+/* q and q' / 2 (hairobb__tube_at's out[4], out[5]) at 8 values of u at
+   once, each lane rounded as hairobb__tube_at rounds (the same products
+   and sums in the same order), so the samples agree on every path. */
+static void hairobb__tube_q_v8(const hairobb__ray_poly *p, const float u_lanes[8], float q_out[8], float slope_out[8])
+{
+    hairobb__v8 u = hairobb__v8_load(u_lanes), x, y, r, dx, dy, dr, q, w;
+#define HAIROBB__HORNER(k, value, d1) \
+    value = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul( \
+        hairobb__v8_set1(p->a[3][k]), u), hairobb__v8_set1(p->a[2][k])), u), hairobb__v8_set1(p->a[1][k])), u), \
+        hairobb__v8_set1(p->a[0][k])); \
+    d1 = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(hairobb__v8_set1(p->d[1][k]), u), \
+        hairobb__v8_set1(p->d[0][k])), u), hairobb__v8_set1(p->a[1][k]))
+    HAIROBB__HORNER(0, x, dx);
+    HAIROBB__HORNER(1, y, dy);
+    HAIROBB__HORNER(3, r, dr);
+#undef HAIROBB__HORNER
+    r = hairobb__v8_max(r, hairobb__v8_set1(0.0f));
+    q = hairobb__v8_sub(hairobb__v8_add(hairobb__v8_mul(x, x), hairobb__v8_mul(y, y)), hairobb__v8_mul(r, r));
+    w = hairobb__v8_add(hairobb__v8_mul(x, dx), hairobb__v8_mul(y, dy));
+    hairobb__v8_store(q_out, q);
+    hairobb__v8_store(slope_out, hairobb__v8_sub(w, hairobb__v8_mul(r, dr)));
+}
+
+/* Both sheets' g (hairobb__tube_g, sheet +1 and -1) at 8 values of u at
+   once, rounded as the scalar path rounds: w + z' S and w - z' S, S =
+   sqrt(-q) inside and 0 elsewhere (sqrt is exact-rounded on every path). */
+static void hairobb__tube_g_v8(const hairobb__ray_poly *p, const float u_lanes[8], float entry_out[8], float exit_out[8])
+{
+    hairobb__v8 u = hairobb__v8_load(u_lanes), x, y, r, dx, dy, dz, q, w, along_s;
+    float lanes[8];
+#define HAIROBB__HORNER(k, value, d1) \
+    value = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul( \
+        hairobb__v8_set1(p->a[3][k]), u), hairobb__v8_set1(p->a[2][k])), u), hairobb__v8_set1(p->a[1][k])), u), \
+        hairobb__v8_set1(p->a[0][k])); \
+    d1 = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(hairobb__v8_set1(p->d[1][k]), u), \
+        hairobb__v8_set1(p->d[0][k])), u), hairobb__v8_set1(p->a[1][k]))
+    HAIROBB__HORNER(0, x, dx);
+    HAIROBB__HORNER(1, y, dy);
+#undef HAIROBB__HORNER
+    dz = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(hairobb__v8_set1(p->d[1][2]), u),
+                                                         hairobb__v8_set1(p->d[0][2])), u), hairobb__v8_set1(p->a[1][2]));
+    r = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(
+        hairobb__v8_set1(p->a[3][3]), u), hairobb__v8_set1(p->a[2][3])), u), hairobb__v8_set1(p->a[1][3])), u),
+        hairobb__v8_set1(p->a[0][3]));
+    r = hairobb__v8_max(r, hairobb__v8_set1(0.0f));
+    q = hairobb__v8_sub(hairobb__v8_add(hairobb__v8_mul(x, x), hairobb__v8_mul(y, y)), hairobb__v8_mul(r, r));
+    w = hairobb__v8_add(hairobb__v8_mul(x, dx), hairobb__v8_mul(y, dy));
+    /* -q where q < 0, else 0 (max takes its second operand for NaN and ties) */
+    hairobb__v8_store(lanes, hairobb__v8_max(hairobb__v8_sub(hairobb__v8_set1(0.0f), q), hairobb__v8_set1(0.0f)));
+    hairobb__v4_store(lanes, hairobb__v4_sqrt(hairobb__v4_load(lanes)));
+    hairobb__v4_store(lanes + 4, hairobb__v4_sqrt(hairobb__v4_load(lanes + 4)));
+    along_s = hairobb__v8_mul(dz, hairobb__v8_load(lanes));
+    hairobb__v8_store(entry_out, hairobb__v8_add(w, along_s));
+    hairobb__v8_store(exit_out, hairobb__v8_sub(w, along_s));
+}
+
 static float hairobb__tube_g(const float at[HAIROBB__TUBE_AT], float sheet) { return at[0] + sheet * at[1] * at[3]; }
 
 /* Regula falsi with the Illinois rule on [*lo, *hi], where f changes sign
@@ -7546,35 +7602,54 @@ static int hairobb__tube_joint(hairobb__ray_state *rs, const hairobb__ray_poly *
     return found;
 }
 
-/* Both sheets' roots in the inside interval [a, b]. */
+/* Both sheets' roots in the inside interval [a, b]: g of both sheets at
+   the samples, 8 at a time (hairobb__tube_g_v8), each sign change refined. */
 static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__ray_poly *p, uint32_t prim, float a, float b,
                                 float min_tangent2, int any_hit)
 {
-    float previous[HAIROBB__TUBE_AT], current[HAIROBB__TUBE_AT], u_previous = a, sheet;
+    float ends[HAIROBB__TUBE_AT], u_lanes[8], g_lanes[2][8], g_previous[2], u_previous = a;
     /* a long interval (a ray along a bent fibre, which can cross one sheet
        twice) at the outer samples' spacing at least */
-    int k, found = 0, samples = (int)((b - a) * (float)(4 * HAIROBB__TUBE_SAMPLES)) + 1;
+    int k, first, lane, side, found = 0, samples = (int)((b - a) * (float)(4 * HAIROBB__TUBE_SAMPLES)) + 1;
     if (samples < HAIROBB__TUBE_INSIDE_SAMPLES) samples = HAIROBB__TUBE_INSIDE_SAMPLES;
-    hairobb__tube_at(p, a, previous);
-    if (a == 0.0f) found |= hairobb__tube_joint(rs, p, prim, previous, 0, min_tangent2);
-    if (found && any_hit) return 1;
-    for (k = 1; k <= samples; ++k) {
-        float u = k == samples ? b : a + (b - a) * ((float)k / (float)samples);
-        hairobb__tube_at(p, u, current);
-        for (sheet = 1.0f; sheet >= -1.0f; sheet -= 2.0f) {
-            float g0 = hairobb__tube_g(previous, sheet), g1 = hairobb__tube_g(current, sheet);
-            if (k == 1 && g0 == 0.0f) found |= hairobb__tube_hit(rs, p, prim, a, sheet, min_tangent2);
-            if (g1 == 0.0f) {
-                found |= hairobb__tube_hit(rs, p, prim, u, sheet, min_tangent2);
-            } else if (g0 != 0.0f && (g0 < 0.0f) != (g1 < 0.0f)) {
-                found |= hairobb__tube_hit(rs, p, prim, hairobb__tube_root(p, u_previous, u, g0, g1, sheet), sheet, min_tangent2);
-            }
-            if (found && any_hit) return 1;
-        }
-        memcpy(previous, current, sizeof previous);
-        u_previous = u;
+    if (a == 0.0f) {
+        hairobb__tube_at(p, a, ends);
+        found |= hairobb__tube_joint(rs, p, prim, ends, 0, min_tangent2);
+        if (found && any_hit) return 1;
     }
-    if (b == 1.0f) found |= hairobb__tube_joint(rs, p, prim, previous, 1, min_tangent2);
+    /* lane 0 of the first group is u = a, then the samples k = 1 .. samples */
+    for (first = 0; first <= samples; first += 8) {
+        for (lane = 0; lane < 8; ++lane) {
+            k = first + lane < samples ? first + lane : samples;
+            u_lanes[lane] = k == 0 ? a : k == samples ? b : a + (b - a) * ((float)k / (float)samples);
+        }
+        hairobb__tube_g_v8(p, u_lanes, g_lanes[0], g_lanes[1]);
+        for (lane = 0; lane < 8 && first + lane <= samples; ++lane) {
+            float u = u_lanes[lane];
+            k = first + lane;
+            if (k == 0) {
+                g_previous[0] = g_lanes[0][0];
+                g_previous[1] = g_lanes[1][0];
+                continue;
+            }
+            for (side = 0; side < 2; ++side) {
+                float sheet = side == 0 ? 1.0f : -1.0f, g0 = g_previous[side], g1 = g_lanes[side][lane];
+                if (k == 1 && g0 == 0.0f) found |= hairobb__tube_hit(rs, p, prim, a, sheet, min_tangent2);
+                if (g1 == 0.0f) {
+                    found |= hairobb__tube_hit(rs, p, prim, u, sheet, min_tangent2);
+                } else if (g0 != 0.0f && (g0 < 0.0f) != (g1 < 0.0f)) {
+                    found |= hairobb__tube_hit(rs, p, prim, hairobb__tube_root(p, u_previous, u, g0, g1, sheet), sheet, min_tangent2);
+                }
+                if (found && any_hit) return 1;
+                g_previous[side] = g1;
+            }
+            u_previous = u;
+        }
+    }
+    if (b == 1.0f) {
+        hairobb__tube_at(p, b, ends);
+        found |= hairobb__tube_joint(rs, p, prim, ends, 1, min_tangent2);
+    }
     return found;
 }
 
@@ -7595,7 +7670,8 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
                                    int any_hit)
 {
     hairobb__ray_poly poly;
-    float previous[HAIROBB__TUBE_AT], current[HAIROBB__TUBE_AT], u_previous, start = -1.0f, bernstein[7] = {0, 0, 0, 0, 0, 0, 0}, scale = 0.0f;
+    float at_end[HAIROBB__TUBE_AT], start = -1.0f, bernstein[7] = {0, 0, 0, 0, 0, 0, 0}, scale = 0.0f;
+    float sample_u[HAIROBB__TUBE_SAMPLES + 8], sample_q[HAIROBB__TUBE_SAMPLES + 8], sample_slope[HAIROBB__TUBE_SAMPLES + 8];
     float min_tangent2 = 0.0f, margin, u_lo, u_hi;
     int k, samples, found = 0;
     /* q's Bernstein coefficients bound it: all of them clearly positive,
@@ -7642,34 +7718,43 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
     }
     min_tangent2 *= 1.0f / 16777216.0f;
     hairobb__to_power_form(c, &poly);
-    u_previous = u_lo;
-    hairobb__tube_at(&poly, u_lo, previous);
-    if (bvh->end_caps && u_lo == 0.0f && previous[4] <= 0.0f && (found = hairobb__tube_cap(bvh, rs, previous, prim, 0)) && any_hit)
-        return 1;
-    if (previous[4] < 0.0f) start = u_lo;   /* inside at the open end (or by rounding at u_lo) */
+    /* q and q' at every sample first, 8 at a time (at most 33 + 1) */
+    for (k = 0; k <= samples; ++k)
+        sample_u[k] = k == 0 ? u_lo : k == samples ? u_hi : u_lo + (u_hi - u_lo) * ((float)k / (float)samples);
+    for (k = 0; k <= samples; k += 8) {
+        int lane;
+        for (lane = samples + 1; lane < k + 8; ++lane) sample_u[lane] = u_hi;   /* a last partial group: spare lanes */
+        hairobb__tube_q_v8(&poly, sample_u + k, sample_q + k, sample_slope + k);
+    }
+    if (bvh->end_caps && u_lo == 0.0f && sample_q[0] <= 0.0f) {
+        hairobb__tube_at(&poly, u_lo, at_end);
+        if ((found = hairobb__tube_cap(bvh, rs, at_end, prim, 0)) && any_hit) return 1;
+    }
+    if (sample_q[0] < 0.0f) start = u_lo;   /* inside at the open end (or by rounding at u_lo) */
     for (k = 1; k <= samples; ++k) {
-        float u = k == samples ? u_hi : u_lo + (u_hi - u_lo) * ((float)k / (float)samples);
-        hairobb__tube_at(&poly, u, current);
-        if (start < 0.0f && current[4] < 0.0f) {   /* into an inside interval */
-            start = hairobb__tube_split(&poly, u_previous, u, previous[4], current[4], 2);
-        } else if (start >= 0.0f && !(current[4] < 0.0f)) {   /* out of it */
-            found |= hairobb__tube_inside(rs, &poly, prim, start, hairobb__tube_split(&poly, u_previous, u, previous[4], current[4], 2), min_tangent2, any_hit);
+        float u = sample_u[k], u_previous = sample_u[k - 1];
+        float q_previous = sample_q[k - 1], q = sample_q[k];
+        if (start < 0.0f && q < 0.0f) {   /* into an inside interval */
+            start = hairobb__tube_split(&poly, u_previous, u, q_previous, q, 2);
+        } else if (start >= 0.0f && !(q < 0.0f)) {   /* out of it */
+            found |= hairobb__tube_inside(rs, &poly, prim, start, hairobb__tube_split(&poly, u_previous, u, q_previous, q, 2), min_tangent2, any_hit);
             start = -1.0f;
-        } else if (start < 0.0f && previous[5] < 0.0f && current[5] > 0.0f) {
+        } else if (start < 0.0f && sample_slope[k - 1] < 0.0f && sample_slope[k] > 0.0f) {
             /* both outside, but q has a minimum between them: inside there? */
-            float low = hairobb__tube_split(&poly, u_previous, u, previous[5], current[5], 3), at[HAIROBB__TUBE_AT];
+            float low = hairobb__tube_split(&poly, u_previous, u, sample_slope[k - 1], sample_slope[k], 3), at[HAIROBB__TUBE_AT];
             hairobb__tube_at(&poly, low, at);
             if (at[4] < 0.0f)
-                found |= hairobb__tube_inside(rs, &poly, prim, hairobb__tube_split(&poly, u_previous, low, previous[4], at[4], 2),
-                                              hairobb__tube_split(&poly, low, u, at[4], current[4], 2), min_tangent2, any_hit);
+                found |= hairobb__tube_inside(rs, &poly, prim, hairobb__tube_split(&poly, u_previous, low, q_previous, at[4], 2),
+                                              hairobb__tube_split(&poly, low, u, at[4], q, 2), min_tangent2, any_hit);
         }
         if (found && any_hit) return 1;
-        memcpy(previous, current, sizeof previous);
-        u_previous = u;
     }
     if (start >= 0.0f) found |= hairobb__tube_inside(rs, &poly, prim, start, u_hi, min_tangent2, any_hit);   /* inside at the other open end */
     if (found && any_hit) return 1;
-    if (bvh->end_caps && u_hi == 1.0f && previous[4] <= 0.0f) found |= hairobb__tube_cap(bvh, rs, previous, prim, 1);   /* previous: u = 1 */
+    if (bvh->end_caps && u_hi == 1.0f && sample_q[samples] <= 0.0f) {
+        hairobb__tube_at(&poly, u_hi, at_end);
+        found |= hairobb__tube_cap(bvh, rs, at_end, prim, 1);
+    }
     return found;
 }
 
@@ -8504,6 +8589,8 @@ HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairob
 #define hairobb__tube_split hairobb__tube_split_avx2
 #define hairobb__tube_falsi hairobb__tube_falsi_avx2
 #define hairobb__tube_squares hairobb__tube_squares_avx2
+#define hairobb__tube_q_v8 hairobb__tube_q_v8_avx2
+#define hairobb__tube_g_v8 hairobb__tube_g_v8_avx2
 #define hairobb__ray_point hairobb__ray_point_avx2
 #define hairobb__joint_at hairobb__joint_at_avx2
 #define hairobb__made_moving hairobb__made_moving_avx2
