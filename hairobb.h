@@ -7397,22 +7397,26 @@ static void hairobb__tube_at(const hairobb__ray_poly *p, float u, float out[HAIR
     out[7] = q + 2.0f * r * r;
 }
 
+/* x, y, z or r (lane k of the power form) at 8 values of u, and (where
+   asked) its derivative, rounded as hairobb__horner rounds each lane. */
+HAIROBB__INLINE hairobb__v8 hairobb__horner_v8(const hairobb__ray_poly *p, int k, hairobb__v8 u, hairobb__v8 *d1)
+{
+    if (d1) *d1 = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(hairobb__v8_set1(p->d[1][k]), u),
+                                                                  hairobb__v8_set1(p->d[0][k])), u), hairobb__v8_set1(p->a[1][k]));
+    return hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(
+        hairobb__v8_set1(p->a[3][k]), u), hairobb__v8_set1(p->a[2][k])), u), hairobb__v8_set1(p->a[1][k])), u),
+        hairobb__v8_set1(p->a[0][k]));
+}
+
 /* q and q' / 2 (hairobb__tube_at's out[4], out[5]) at 8 values of u at
    once, each lane rounded as hairobb__tube_at rounds (the same products
    and sums in the same order), so the samples agree on every path. */
 static void hairobb__tube_q_v8(const hairobb__ray_poly *p, const float u_lanes[8], float q_out[8], float slope_out[8])
 {
     hairobb__v8 u = hairobb__v8_load(u_lanes), x, y, r, dx, dy, dr, q, w;
-#define HAIROBB__HORNER(k, value, d1) \
-    value = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul( \
-        hairobb__v8_set1(p->a[3][k]), u), hairobb__v8_set1(p->a[2][k])), u), hairobb__v8_set1(p->a[1][k])), u), \
-        hairobb__v8_set1(p->a[0][k])); \
-    d1 = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(hairobb__v8_set1(p->d[1][k]), u), \
-        hairobb__v8_set1(p->d[0][k])), u), hairobb__v8_set1(p->a[1][k]))
-    HAIROBB__HORNER(0, x, dx);
-    HAIROBB__HORNER(1, y, dy);
-    HAIROBB__HORNER(3, r, dr);
-#undef HAIROBB__HORNER
+    x = hairobb__horner_v8(p, 0, u, &dx);
+    y = hairobb__horner_v8(p, 1, u, &dy);
+    r = hairobb__horner_v8(p, 3, u, &dr);
     r = hairobb__v8_max(r, hairobb__v8_set1(0.0f));
     q = hairobb__v8_sub(hairobb__v8_add(hairobb__v8_mul(x, x), hairobb__v8_mul(y, y)), hairobb__v8_mul(r, r));
     w = hairobb__v8_add(hairobb__v8_mul(x, dx), hairobb__v8_mul(y, dy));
@@ -7427,20 +7431,10 @@ static void hairobb__tube_g_v8(const hairobb__ray_poly *p, const float u_lanes[8
 {
     hairobb__v8 u = hairobb__v8_load(u_lanes), x, y, r, dx, dy, dz, q, w, along_s;
     float lanes[8];
-#define HAIROBB__HORNER(k, value, d1) \
-    value = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul( \
-        hairobb__v8_set1(p->a[3][k]), u), hairobb__v8_set1(p->a[2][k])), u), hairobb__v8_set1(p->a[1][k])), u), \
-        hairobb__v8_set1(p->a[0][k])); \
-    d1 = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(hairobb__v8_set1(p->d[1][k]), u), \
-        hairobb__v8_set1(p->d[0][k])), u), hairobb__v8_set1(p->a[1][k]))
-    HAIROBB__HORNER(0, x, dx);
-    HAIROBB__HORNER(1, y, dy);
-#undef HAIROBB__HORNER
-    dz = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(hairobb__v8_set1(p->d[1][2]), u),
-                                                         hairobb__v8_set1(p->d[0][2])), u), hairobb__v8_set1(p->a[1][2]));
-    r = hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(hairobb__v8_add(hairobb__v8_mul(
-        hairobb__v8_set1(p->a[3][3]), u), hairobb__v8_set1(p->a[2][3])), u), hairobb__v8_set1(p->a[1][3])), u),
-        hairobb__v8_set1(p->a[0][3]));
+    x = hairobb__horner_v8(p, 0, u, &dx);
+    y = hairobb__horner_v8(p, 1, u, &dy);
+    hairobb__horner_v8(p, 2, u, &dz);   /* z' only (the value is unused) */
+    r = hairobb__horner_v8(p, 3, u, NULL);
     r = hairobb__v8_max(r, hairobb__v8_set1(0.0f));
     q = hairobb__v8_sub(hairobb__v8_add(hairobb__v8_mul(x, x), hairobb__v8_mul(y, y)), hairobb__v8_mul(r, r));
     w = hairobb__v8_add(hairobb__v8_mul(x, dx), hairobb__v8_mul(y, dy));
@@ -8590,6 +8584,7 @@ HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairob
 #define hairobb__tube_falsi hairobb__tube_falsi_avx2
 #define hairobb__tube_squares hairobb__tube_squares_avx2
 #define hairobb__tube_q_v8 hairobb__tube_q_v8_avx2
+#define hairobb__horner_v8 hairobb__horner_v8_avx2
 #define hairobb__tube_g_v8 hairobb__tube_g_v8_avx2
 #define hairobb__ray_point hairobb__ray_point_avx2
 #define hairobb__joint_at hairobb__joint_at_avx2
