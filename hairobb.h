@@ -7426,14 +7426,16 @@ static void hairobb__tube_q_v8(const hairobb__ray_poly *p, const float u_lanes[8
 
 /* Both sheets' g (hairobb__tube_g, sheet +1 and -1) at 8 values of u at
    once, rounded as the scalar path rounds: w + z' S and w - z' S, S =
-   sqrt(-q) inside and 0 elsewhere (sqrt is exact-rounded on every path). */
-static void hairobb__tube_g_v8(const hairobb__ray_poly *p, const float u_lanes[8], float entry_out[8], float exit_out[8])
+   sqrt(-q) inside and 0 elsewhere (sqrt is exact-rounded on every path);
+   and the centre line's depth z. */
+static void hairobb__tube_g_v8(const hairobb__ray_poly *p, const float u_lanes[8], float entry_out[8], float exit_out[8],
+                               float depth_out[8])
 {
     hairobb__v8 u = hairobb__v8_load(u_lanes), x, y, r, dx, dy, dz, q, w, along_s;
     float lanes[8];
     x = hairobb__horner_v8(p, 0, u, &dx);
     y = hairobb__horner_v8(p, 1, u, &dy);
-    hairobb__horner_v8(p, 2, u, &dz);   /* z' only (the value is unused) */
+    hairobb__v8_store(depth_out, hairobb__horner_v8(p, 2, u, &dz));
     r = hairobb__horner_v8(p, 3, u, NULL);
     r = hairobb__v8_max(r, hairobb__v8_set1(0.0f));
     q = hairobb__v8_sub(hairobb__v8_add(hairobb__v8_mul(x, x), hairobb__v8_mul(y, y)), hairobb__v8_mul(r, r));
@@ -7512,6 +7514,26 @@ static float hairobb__tube_root(const hairobb__ray_poly *p, float lo, float hi, 
 {
     int exact;
     return hairobb__tube_falsi(p, &lo, &hi, g_lo, g_hi, -1, sheet, 30, 0.0f, &exact);
+}
+
+/* Whether no root of a sheet between samples u0 and u1 (the centre line's
+   depths z0, z1 there) can be accepted, so that refining it would be
+   wasted (a ray's other sheet, or a segment behind its nearest hit so
+   far). reach: a bound on |z'| over the segment (3 max |z[k+1] - z[k]| of
+   its control points) and on r (their largest r). Between the samples z
+   lies within (z0 + z1) / 2 +- reach[0] (u1 - u0) / 2; a root's depth z -
+   sheet S is that, less S <= r on the entry sheet (+1), plus S on the exit
+   sheet (-1). The slack, 2^-14 of the magnitudes, covers the roundings of
+   z: hairobb__tube_hit's t is the same rounded expression of a depth at
+   least this bound, and rounding is monotone, so the answer is exact. */
+static int hairobb__tube_root_unreachable(const hairobb__ray_state *rs, float u0, float u1, float z0, float z1, float sheet,
+                                          const float reach[2])
+{
+    float middle = 0.5f * (z0 + z1), spread = 0.5f * reach[0] * (u1 - u0);
+    float slack = (fabsf(z0) + fabsf(z1) + reach[0] + reach[1]) * (1.0f / 16384.0f);
+    float nearest = middle - spread - slack - (sheet > 0.0f ? reach[1] : 0.0f);
+    float farthest = middle + spread + slack + (sheet < 0.0f ? reach[1] : 0.0f);
+    return rs->tube_t_base + nearest * rs->inv_dir_length > rs->tfar || rs->tube_t_base + farthest * rs->inv_dir_length < rs->tnear;
 }
 
 /* Records a sheet's hit at u if the ray passes within r of the centre there. */
@@ -7596,50 +7618,111 @@ static int hairobb__tube_joint(hairobb__ray_state *rs, const hairobb__ray_poly *
     return found;
 }
 
+/* The exit sheet's roots held back by hairobb__tube_inside, in u order. */
+static int hairobb__tube_exits(hairobb__ray_state *rs, const hairobb__ray_poly *p, uint32_t prim, float exits[8][6], int *count,
+                               float min_tangent2, const float reach[2])
+{
+    int k, found = 0;
+    for (k = 0; k < *count; ++k) {
+        const float *e = exits[k];
+        if (!hairobb__tube_root_unreachable(rs, e[0], e[1], e[4], e[5], -1.0f, reach))
+            found |= hairobb__tube_hit(rs, p, prim, hairobb__tube_root(p, e[0], e[1], e[2], e[3], -1.0f), -1.0f, min_tangent2);
+    }
+    *count = 0;
+    return found;
+}
+
 /* Both sheets' roots in the inside interval [a, b]: g of both sheets at
    the samples, 8 at a time (hairobb__tube_g_v8), each sign change refined. */
 static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__ray_poly *p, uint32_t prim, float a, float b,
-                                float min_tangent2, int any_hit)
+                                float min_tangent2, const float reach[2], int any_hit)
 {
-    float ends[HAIROBB__TUBE_AT], u_lanes[8], g_lanes[2][8], g_previous[2], u_previous = a;
+    float ends[HAIROBB__TUBE_AT], u_lanes[8], g_lanes[2][8], z_lanes[8], g_previous[2], u_previous = a, z_previous = 0.0f;
+    /* the exit sheet's sign changes, refined after the entry sheet's (a
+       nearest hit) unless hairobb__tube_root_unreachable then rules them
+       out: u0, u1, g0, g1, z0, z1 each */
+    float exits[8][6];
     /* a long interval (a ray along a bent fibre, which can cross one sheet
        twice) at the outer samples' spacing at least */
-    int k, first, lane, side, found = 0, samples = (int)((b - a) * (float)(4 * HAIROBB__TUBE_SAMPLES)) + 1;
+    int k, first, lane, side, found = 0, exit_count = 0, samples = (int)((b - a) * (float)(4 * HAIROBB__TUBE_SAMPLES)) + 1;
+    unsigned carry_negative[2] = {0u, 0u}, carry_exact[2] = {0u, 0u};
+    static const float lane_index[8] = {0.0f, 1.0f, 2.0f, 3.0f, 4.0f, 5.0f, 6.0f, 7.0f};
     if (samples < HAIROBB__TUBE_INSIDE_SAMPLES) samples = HAIROBB__TUBE_INSIDE_SAMPLES;
     if (a == 0.0f) {
         hairobb__tube_at(p, a, ends);
         found |= hairobb__tube_joint(rs, p, prim, ends, 0, min_tangent2);
         if (found && any_hit) return 1;
     }
-    /* lane 0 of the first group is u = a, then the samples k = 1 .. samples */
+    /* lane 0 of the first group is u = a, then the samples k = 1 .. samples;
+       the lanes where either sheet's g is 0 or changes sign from the lane
+       before (bits of the masks; carry: lane 7 of the group before) are
+       visited, in order, entry sheet first */
     for (first = 0; first <= samples; first += 8) {
-        for (lane = 0; lane < 8; ++lane) {
-            k = first + lane < samples ? first + lane : samples;
-            u_lanes[lane] = k == 0 ? a : k == samples ? b : a + (b - a) * ((float)k / (float)samples);
+        unsigned valid = first + 8 <= samples + 1 ? 0xffu : (1u << (samples + 1 - first)) - 1u, events = 0, zero[2], change[2];
+        hairobb__v8 u_vector = hairobb__v8_add(hairobb__v8_set1((float)first), hairobb__v8_load(lane_index));
+        u_vector = hairobb__v8_div(u_vector, hairobb__v8_set1((float)samples));
+        hairobb__v8_store(u_lanes, hairobb__v8_add(hairobb__v8_set1(a), hairobb__v8_mul(hairobb__v8_set1(b - a), u_vector)));
+        for (lane = samples - first; lane < 8; ++lane)
+            if (lane >= 0) u_lanes[lane] = b;   /* k = samples, and spare lanes */
+        if (first == 0) u_lanes[0] = a;
+        hairobb__tube_g_v8(p, u_lanes, g_lanes[0], g_lanes[1], z_lanes);
+        for (side = 0; side < 2; ++side) {
+            hairobb__v8 g = hairobb__v8_load(g_lanes[side]), zero_v = hairobb__v8_set1(0.0f);
+            unsigned negative = (unsigned)hairobb__v8_lt_bits(g, zero_v);
+            unsigned exact = (unsigned)(hairobb__v8_le_bits(g, zero_v) & hairobb__v8_le_bits(zero_v, g));
+            unsigned negative_before = (negative << 1) | carry_negative[side], exact_before = (exact << 1) | carry_exact[side];
+            /* as g0 < 0 != g1 < 0 with neither 0 (NaN counts as positive) */
+            change[side] = (negative ^ negative_before) & ~exact & ~exact_before & valid;
+            zero[side] = exact & valid;
+            carry_negative[side] = negative >> 7 & 1u;
+            carry_exact[side] = exact >> 7 & 1u;
+            events |= change[side] | zero[side];
         }
-        hairobb__tube_g_v8(p, u_lanes, g_lanes[0], g_lanes[1]);
-        for (lane = 0; lane < 8 && first + lane <= samples; ++lane) {
-            float u = u_lanes[lane];
+        if (first == 0) {
+            events = (events & ~1u) | (zero[0] | zero[1]) << 1;   /* u = a: a root of k = 1's */
+            g_previous[0] = g_lanes[0][0];
+            g_previous[1] = g_lanes[1][0];
+            z_previous = z_lanes[0];
+            u_previous = a;
+        }
+        while (events) {
+            lane = hairobb__lowest_bit(events);
+            events &= events - 1u;
             k = first + lane;
-            if (k == 0) {
-                g_previous[0] = g_lanes[0][0];
-                g_previous[1] = g_lanes[1][0];
-                continue;
+            if (lane > 0) {
+                g_previous[0] = g_lanes[0][lane - 1];
+                g_previous[1] = g_lanes[1][lane - 1];
+                z_previous = z_lanes[lane - 1];
+                u_previous = u_lanes[lane - 1];
             }
             for (side = 0; side < 2; ++side) {
-                float sheet = side == 0 ? 1.0f : -1.0f, g0 = g_previous[side], g1 = g_lanes[side][lane];
+                float sheet = side == 0 ? 1.0f : -1.0f, g0 = g_previous[side], g1 = g_lanes[side][lane], u = u_lanes[lane];
                 if (k == 1 && g0 == 0.0f) found |= hairobb__tube_hit(rs, p, prim, a, sheet, min_tangent2);
-                if (g1 == 0.0f) {
+                if (zero[side] >> lane & 1u) {
                     found |= hairobb__tube_hit(rs, p, prim, u, sheet, min_tangent2);
-                } else if (g0 != 0.0f && (g0 < 0.0f) != (g1 < 0.0f)) {
-                    found |= hairobb__tube_hit(rs, p, prim, hairobb__tube_root(p, u_previous, u, g0, g1, sheet), sheet, min_tangent2);
+                } else if (change[side] >> lane & 1u) {
+                    if (side == 1 && !any_hit) {
+                        if (exit_count == 8) found |= hairobb__tube_exits(rs, p, prim, exits, &exit_count, min_tangent2, reach);
+                        exits[exit_count][0] = u_previous;
+                        exits[exit_count][1] = u;
+                        exits[exit_count][2] = g0;
+                        exits[exit_count][3] = g1;
+                        exits[exit_count][4] = z_previous;
+                        exits[exit_count++][5] = z_lanes[lane];
+                    } else if (!hairobb__tube_root_unreachable(rs, u_previous, u, z_previous, z_lanes[lane], sheet, reach)) {
+                        found |= hairobb__tube_hit(rs, p, prim, hairobb__tube_root(p, u_previous, u, g0, g1, sheet), sheet, min_tangent2);
+                    }
                 }
                 if (found && any_hit) return 1;
-                g_previous[side] = g1;
             }
-            u_previous = u;
         }
+        /* lane 7 is the next group's lane before its lane 0 */
+        g_previous[0] = g_lanes[0][7];
+        g_previous[1] = g_lanes[1][7];
+        z_previous = z_lanes[7];
+        u_previous = u_lanes[7];
     }
+    found |= hairobb__tube_exits(rs, p, prim, exits, &exit_count, min_tangent2, reach);
     if (b == 1.0f) {
         hairobb__tube_at(p, b, ends);
         found |= hairobb__tube_joint(rs, p, prim, ends, 1, min_tangent2);
@@ -7666,7 +7749,7 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
     hairobb__ray_poly poly;
     float at_end[HAIROBB__TUBE_AT], start = -1.0f, bernstein[7] = {0, 0, 0, 0, 0, 0, 0}, scale = 0.0f;
     float sample_u[HAIROBB__TUBE_SAMPLES + 8], sample_q[HAIROBB__TUBE_SAMPLES + 8], sample_slope[HAIROBB__TUBE_SAMPLES + 8];
-    float min_tangent2 = 0.0f, margin, u_lo, u_hi;
+    float min_tangent2 = 0.0f, margin, u_lo, u_hi, reach[2] = {0.0f, 0.0f};
     int k, samples, found = 0;
     /* q's Bernstein coefficients bound it: all of them clearly positive,
        the ray passes farther than r from the centre line everywhere (most
@@ -7711,6 +7794,9 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
         min_tangent2 = hairobb__maxf(min_tangent2, 9.0f * (dx * dx + dy * dy + dz * dz));
     }
     min_tangent2 *= 1.0f / 16777216.0f;
+    /* bounds on |z'| and r over the segment (hairobb__tube_root_unreachable) */
+    for (k = 0; k < 3; ++k) reach[0] = hairobb__maxf(reach[0], 3.0f * fabsf(c->z[k + 1] - c->z[k]));
+    for (k = 0; k < 4; ++k) reach[1] = hairobb__maxf(reach[1], c->r[k]);
     hairobb__to_power_form(c, &poly);
     /* q and q' at every sample first, 8 at a time (at most 33 + 1) */
     for (k = 0; k <= samples; ++k)
@@ -7731,7 +7817,7 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
         if (start < 0.0f && q < 0.0f) {   /* into an inside interval */
             start = hairobb__tube_split(&poly, u_previous, u, q_previous, q, 2);
         } else if (start >= 0.0f && !(q < 0.0f)) {   /* out of it */
-            found |= hairobb__tube_inside(rs, &poly, prim, start, hairobb__tube_split(&poly, u_previous, u, q_previous, q, 2), min_tangent2, any_hit);
+            found |= hairobb__tube_inside(rs, &poly, prim, start, hairobb__tube_split(&poly, u_previous, u, q_previous, q, 2), min_tangent2, reach, any_hit);
             start = -1.0f;
         } else if (start < 0.0f && sample_slope[k - 1] < 0.0f && sample_slope[k] > 0.0f) {
             /* both outside, but q has a minimum between them: inside there? */
@@ -7739,11 +7825,11 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
             hairobb__tube_at(&poly, low, at);
             if (at[4] < 0.0f)
                 found |= hairobb__tube_inside(rs, &poly, prim, hairobb__tube_split(&poly, u_previous, low, q_previous, at[4], 2),
-                                              hairobb__tube_split(&poly, low, u, at[4], q, 2), min_tangent2, any_hit);
+                                              hairobb__tube_split(&poly, low, u, at[4], q, 2), min_tangent2, reach, any_hit);
         }
         if (found && any_hit) return 1;
     }
-    if (start >= 0.0f) found |= hairobb__tube_inside(rs, &poly, prim, start, u_hi, min_tangent2, any_hit);   /* inside at the other open end */
+    if (start >= 0.0f) found |= hairobb__tube_inside(rs, &poly, prim, start, u_hi, min_tangent2, reach, any_hit);   /* inside at the other open end */
     if (found && any_hit) return 1;
     if (bvh->end_caps && u_hi == 1.0f && sample_q[samples] <= 0.0f) {
         hairobb__tube_at(&poly, u_hi, at_end);
@@ -8580,6 +8666,8 @@ HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairob
 #define hairobb__tube_hit hairobb__tube_hit_avx2
 #define hairobb__tube_inside hairobb__tube_inside_avx2
 #define hairobb__tube_root hairobb__tube_root_avx2
+#define hairobb__tube_root_unreachable hairobb__tube_root_unreachable_avx2
+#define hairobb__tube_exits hairobb__tube_exits_avx2
 #define hairobb__tube_split hairobb__tube_split_avx2
 #define hairobb__tube_falsi hairobb__tube_falsi_avx2
 #define hairobb__tube_squares hairobb__tube_squares_avx2
