@@ -7490,6 +7490,32 @@ static float hairobb__tube_falsi(const hairobb__ray_poly *p, float *lo_io, float
     return u;
 }
 
+/* hairobb__tube_split for q: Newton steps on q (q' is hairobb__tube_at's
+   out[5] twice), kept in the bracket (halving where a step leaves it);
+   once a step is within a quarter of the tolerance, one point just past
+   its end on the far side closes the bracket. About 3 evaluations where
+   regula falsi took 6. */
+static float hairobb__tube_edge(const hairobb__ray_poly *p, float lo, float hi, float q_lo, float q_hi)
+{
+    float tolerance = (hi - lo) * (1.0f / 16384.0f), u = lo + (hi - lo) * (q_lo / (q_lo - q_hi)), next, at[HAIROBB__TUBE_AT];
+    int iteration, lo_inside = q_lo < 0.0f;
+    (void)q_hi;
+    for (iteration = 0; iteration < 20 && hi - lo > tolerance; ++iteration) {
+        if (!(u > lo && u < hi)) u = 0.5f * (lo + hi);
+        if (u <= lo || u >= hi) break;
+        hairobb__tube_at(p, u, at);
+        if (at[4] == 0.0f) return u;
+        if ((at[4] < 0.0f) == lo_inside) lo = u; else hi = u;
+        next = at[5] != 0.0f ? u - at[4] / (2.0f * at[5]) : u;
+        if (fabsf(next - u) <= 0.25f * tolerance)
+            /* converged: a point a quarter tolerance past the step's end, on
+               the root's side of u (which end of the bracket u became) */
+            next = u == lo ? hairobb__maxf(next, u) + 0.25f * tolerance : hairobb__minf(next, u) - 0.25f * tolerance;
+        u = next;
+    }
+    return lo_inside ? hi : lo;
+}
+
 /* A point in [lo, hi] where q (which 2) or q' (which 3) changes sign (f_lo
    at lo), to 2^-14 of the step. For q, the end of the last bracket where q
    >= 0 (outside, S = 0): there both sheets' g are w, so a root of either
@@ -7501,10 +7527,10 @@ static float hairobb__tube_split(const hairobb__ray_poly *p, float lo, float hi,
     /* q and q' are smooth polynomials: the bracket closes in a few steps
        where halving took 14 */
     int exact;
-    float f_start = f_lo, u = hairobb__tube_falsi(p, &lo, &hi, f_lo, f_hi, which, 0.0f, 20, (hi - lo) * (1.0f / 16384.0f), &exact);
-    if (exact) return u;
-    if (which == 2) return f_start < 0.0f ? hi : lo;
-    return 0.5f * (lo + hi);
+    float u;
+    if (which == 2) return hairobb__tube_edge(p, lo, hi, f_lo, f_hi);
+    u = hairobb__tube_falsi(p, &lo, &hi, f_lo, f_hi, which, 0.0f, 20, (hi - lo) * (1.0f / 16384.0f), &exact);
+    return exact ? u : 0.5f * (lo + hi);
 }
 
 /* The root of a sheet's g in [lo, hi], where it changes sign (g_lo at lo,
@@ -8669,6 +8695,7 @@ HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairob
 #define hairobb__tube_root_unreachable hairobb__tube_root_unreachable_avx2
 #define hairobb__tube_exits hairobb__tube_exits_avx2
 #define hairobb__tube_split hairobb__tube_split_avx2
+#define hairobb__tube_edge hairobb__tube_edge_avx2
 #define hairobb__tube_falsi hairobb__tube_falsi_avx2
 #define hairobb__tube_squares hairobb__tube_squares_avx2
 #define hairobb__tube_q_v8 hairobb__tube_q_v8_avx2
