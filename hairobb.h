@@ -7776,7 +7776,9 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
     float at_end[HAIROBB__TUBE_AT], start = -1.0f, bernstein[7] = {0, 0, 0, 0, 0, 0, 0}, scale = 0.0f;
     float sample_u[HAIROBB__TUBE_SAMPLES + 8], sample_q[HAIROBB__TUBE_SAMPLES + 8], sample_slope[HAIROBB__TUBE_SAMPLES + 8];
     float min_tangent2 = 0.0f, margin, u_lo, u_hi, reach[2] = {0.0f, 0.0f};
-    int k, samples, found = 0;
+    int k, samples, found = 0, first_below, last_below, first, lane;
+    unsigned nonpositive = 0, carry_inside = 0, carry_negative = 0;
+    static const float lane_index[8] = {0.0f, 1.0f, 2.0f, 3.0f, 4.0f, 5.0f, 6.0f, 7.0f};
     /* q's Bernstein coefficients bound it: all of them clearly positive,
        the ray passes farther than r from the centre line everywhere (most
        segments that pass the ribbon's cull) */
@@ -7785,30 +7787,31 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
     for (k = 0; k < 4; ++k) scale = hairobb__maxf(scale, hairobb__maxf(c->x[k] * c->x[k] + c->y[k] * c->y[k], c->r[k] * c->r[k]));
     hairobb__tube_squares(c->r, -1.0f, bernstein);
     margin = scale * (64.0f * FLT_EPSILON);
-    for (k = 0; k < 7 && bernstein[k] > margin; ++k) {}
-    if (k == 7) return 0;
+    for (k = 0; k < 7; ++k) {
+        bernstein[k] -= margin;
+        if (bernstein[k] <= 0.0f) nonpositive |= 1u << k;
+    }
+    if (!nonpositive) return 0;
     /* the curve (u, q(u)) lies in the hull of the points (i/6, b_i): q <= 0
        only between the extreme u where that hull reaches down to 0 (the
        points at or below the margin, and where a line between two points
        on either side of it crosses it). Most segments that pass the cull
        are near the ray over a small part of u: the samples below take
-       that part only, at the same spacing. */
-    u_lo = 1.0f;
-    u_hi = 0.0f;
+       that part only, at the same spacing. A line from point k to j
+       crosses between k/6 and j/6 (in float too: each step is monotone),
+       so only lines from a point left of the first point at or below 0
+       can move u_lo, and only lines to one right of the last can move u_hi. */
+    first_below = hairobb__lowest_bit(nonpositive);
+    last_below = hairobb__highest_bit(nonpositive);
+    u_lo = (float)first_below * (1.0f / 6.0f);
+    u_hi = (float)last_below * (1.0f / 6.0f);
     for (k = 0; k < 7; ++k) {
-        float bk = bernstein[k] - margin;
         int j;
-        if (bk <= 0.0f) {
-            u_lo = hairobb__minf(u_lo, (float)k * (1.0f / 6.0f));
-            u_hi = hairobb__maxf(u_hi, (float)k * (1.0f / 6.0f));
-        }
-        for (j = k + 1; j < 7; ++j) {
-            float bj = bernstein[j] - margin, cross;
-            if ((bk <= 0.0f) == (bj <= 0.0f)) continue;
-            cross = ((float)k + (float)(j - k) * (bk / (bk - bj))) * (1.0f / 6.0f);
-            u_lo = hairobb__minf(u_lo, cross);
-            u_hi = hairobb__maxf(u_hi, cross);
-        }
+        if (!(nonpositive >> k & 1u)) continue;
+        for (j = 0; j < first_below; ++j)   /* the line from j (above 0) to k */
+            u_lo = hairobb__minf(u_lo, ((float)j + (float)(k - j) * (bernstein[j] / (bernstein[j] - bernstein[k]))) * (1.0f / 6.0f));
+        for (j = last_below + 1; j < 7; ++j)   /* from k to j (above 0) */
+            u_hi = hairobb__maxf(u_hi, ((float)k + (float)(j - k) * (bernstein[k] / (bernstein[k] - bernstein[j]))) * (1.0f / 6.0f));
     }
     /* widened past the crossings' rounding */
     u_lo = u_lo <= 1.0f / 1024.0f ? 0.0f : u_lo - 1.0f / 1024.0f;
@@ -7824,36 +7827,57 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
     for (k = 0; k < 3; ++k) reach[0] = hairobb__maxf(reach[0], 3.0f * fabsf(c->z[k + 1] - c->z[k]));
     for (k = 0; k < 4; ++k) reach[1] = hairobb__maxf(reach[1], c->r[k]);
     hairobb__to_power_form(c, &poly);
-    /* q and q' at every sample first, 8 at a time (at most 33 + 1) */
-    for (k = 0; k <= samples; ++k)
-        sample_u[k] = k == 0 ? u_lo : k == samples ? u_hi : u_lo + (u_hi - u_lo) * ((float)k / (float)samples);
-    for (k = 0; k <= samples; k += 8) {
-        int lane;
-        for (lane = samples + 1; lane < k + 8; ++lane) sample_u[lane] = u_hi;   /* a last partial group: spare lanes */
-        hairobb__tube_q_v8(&poly, sample_u + k, sample_q + k, sample_slope + k);
+    /* q and q' at every sample first, 8 at a time (at most 33 + 1; a last
+       partial group's spare lanes at u_hi) */
+    for (first = 0; first <= samples; first += 8) {
+        hairobb__v8 u_vector = hairobb__v8_add(hairobb__v8_set1((float)first), hairobb__v8_load(lane_index));
+        u_vector = hairobb__v8_div(u_vector, hairobb__v8_set1((float)samples));
+        hairobb__v8_store(sample_u + first, hairobb__v8_add(hairobb__v8_set1(u_lo), hairobb__v8_mul(hairobb__v8_set1(u_hi - u_lo), u_vector)));
+        for (lane = samples - first; lane < 8; ++lane) sample_u[first + lane] = u_hi;
+        if (first == 0) sample_u[0] = u_lo;
+        hairobb__tube_q_v8(&poly, sample_u + first, sample_q + first, sample_slope + first);
     }
     if (bvh->end_caps && u_lo == 0.0f && sample_q[0] <= 0.0f) {
         hairobb__tube_at(&poly, u_lo, at_end);
         if ((found = hairobb__tube_cap(bvh, rs, at_end, prim, 0)) && any_hit) return 1;
     }
     if (sample_q[0] < 0.0f) start = u_lo;   /* inside at the open end (or by rounding at u_lo) */
-    for (k = 1; k <= samples; ++k) {
-        float u = sample_u[k], u_previous = sample_u[k - 1];
-        float q_previous = sample_q[k - 1], q = sample_q[k];
-        if (start < 0.0f && q < 0.0f) {   /* into an inside interval */
-            start = hairobb__tube_split(&poly, u_previous, u, q_previous, q, 2);
-        } else if (start >= 0.0f && !(q < 0.0f)) {   /* out of it */
-            found |= hairobb__tube_inside(rs, &poly, prim, start, hairobb__tube_split(&poly, u_previous, u, q_previous, q, 2), min_tangent2, reach, any_hit);
-            start = -1.0f;
-        } else if (start < 0.0f && sample_slope[k - 1] < 0.0f && sample_slope[k] > 0.0f) {
-            /* both outside, but q has a minimum between them: inside there? */
-            float low = hairobb__tube_split(&poly, u_previous, u, sample_slope[k - 1], sample_slope[k], 3), at[HAIROBB__TUBE_AT];
-            hairobb__tube_at(&poly, low, at);
-            if (at[4] < 0.0f)
-                found |= hairobb__tube_inside(rs, &poly, prim, hairobb__tube_split(&poly, u_previous, low, q_previous, at[4], 2),
-                                              hairobb__tube_split(&poly, low, u, at[4], q, 2), min_tangent2, reach, any_hit);
+    /* the samples k where q goes in (q < 0) or out, or where q' goes from
+       negative to positive with both samples outside (bits of the masks;
+       carry: lane 7 of the group before), visited in order */
+    for (first = 0; first <= samples; first += 8) {
+        hairobb__v8 zero = hairobb__v8_set1(0.0f), slope = hairobb__v8_load(sample_slope + first);
+        unsigned valid = (first + 8 <= samples + 1 ? 0xffu : (1u << (samples + 1 - first)) - 1u) & (first == 0 ? ~1u : ~0u);
+        unsigned inside = (unsigned)hairobb__v8_lt_bits(hairobb__v8_load(sample_q + first), zero);
+        unsigned negative = (unsigned)hairobb__v8_lt_bits(slope, zero), positive = (unsigned)hairobb__v8_lt_bits(zero, slope);
+        unsigned inside_before = (inside << 1) | carry_inside, negative_before = (negative << 1) | carry_negative;
+        unsigned events = ((inside ^ inside_before) | (~inside & ~inside_before & negative_before & positive)) & valid;
+        carry_inside = inside >> 7 & 1u;
+        carry_negative = negative >> 7 & 1u;
+        while (events) {
+            float u, u_previous, q_previous, q;
+            k = first + hairobb__lowest_bit(events);
+            events &= events - 1u;
+            u = sample_u[k];
+            u_previous = sample_u[k - 1];
+            q_previous = sample_q[k - 1];
+            q = sample_q[k];
+            if (start < 0.0f && q < 0.0f) {   /* into an inside interval */
+                start = hairobb__tube_split(&poly, u_previous, u, q_previous, q, 2);
+            } else if (start >= 0.0f && !(q < 0.0f)) {   /* out of it */
+                found |= hairobb__tube_inside(rs, &poly, prim, start, hairobb__tube_split(&poly, u_previous, u, q_previous, q, 2),
+                                              min_tangent2, reach, any_hit);
+                start = -1.0f;
+            } else if (start < 0.0f && sample_slope[k - 1] < 0.0f && sample_slope[k] > 0.0f) {
+                /* both outside, but q has a minimum between them: inside there? */
+                float low = hairobb__tube_split(&poly, u_previous, u, sample_slope[k - 1], sample_slope[k], 3), at[HAIROBB__TUBE_AT];
+                hairobb__tube_at(&poly, low, at);
+                if (at[4] < 0.0f)
+                    found |= hairobb__tube_inside(rs, &poly, prim, hairobb__tube_split(&poly, u_previous, low, q_previous, at[4], 2),
+                                                  hairobb__tube_split(&poly, low, u, at[4], q, 2), min_tangent2, reach, any_hit);
+            }
+            if (found && any_hit) return 1;
         }
-        if (found && any_hit) return 1;
     }
     if (start >= 0.0f) found |= hairobb__tube_inside(rs, &poly, prim, start, u_hi, min_tangent2, reach, any_hit);   /* inside at the other open end */
     if (found && any_hit) return 1;
