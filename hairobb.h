@@ -8038,23 +8038,28 @@ static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *r
    - c(u). */
 static void hairobb__tube_hit_at(const hairobb__ray_state *rs, const float *cp, float u, float t, int cap, hairobb_hit *hit)
 {
-    float s = 1.0f - u, b[4], db[4], d2b[4], C[3] = {0, 0, 0}, T[3] = {0, 0, 0}, T2[3] = {0, 0, 0}, r = 0.0f, dr = 0.0f;
+    float s = 1.0f - u, b[4], db[4], d2b[4], C[4], T[4], T2[4], r, dr;
     float R[3], n[3], cross[3], along, tperp2, denominator, length, scale;
     const float *unit_dir = rs->frame + 6;
+    hairobb__v4 value, tangent, second;
     int i, k;
     b[0] = s * s * s; b[1] = 3.0f * u * s * s; b[2] = 3.0f * u * u * s; b[3] = u * u * u;
     db[0] = -3.0f * s * s; db[1] = 3.0f * s * s - 6.0f * u * s; db[2] = 6.0f * u * s - 3.0f * u * u; db[3] = 3.0f * u * u;
     d2b[0] = 6.0f * s; d2b[1] = 6.0f * u - 12.0f * s; d2b[2] = 6.0f * s - 12.0f * u; d2b[3] = 6.0f * u;
+    /* the sums over control points in order, x, y, z and r in the lanes
+       (a lane rounds as a scalar sum from 0 would) */
+    value = tangent = second = hairobb__v4_set1(0.0f);   /* 0 + -0 is +0, as a scalar sum from 0 */
     for (i = 0; i < 4; ++i) {
-        for (k = 0; k < 3; ++k) {
-            C[k] += b[i] * cp[4 * i + k];
-            T[k] += db[i] * cp[4 * i + k];
-            T2[k] += d2b[i] * cp[4 * i + k];
-        }
-        r += b[i] * cp[4 * i + 3];
-        dr += db[i] * cp[4 * i + 3];
+        hairobb__v4 point = hairobb__v4_load(cp + 4 * i);
+        value = hairobb__v4_add(value, hairobb__v4_mul(hairobb__v4_set1(b[i]), point));
+        tangent = hairobb__v4_add(tangent, hairobb__v4_mul(hairobb__v4_set1(db[i]), point));
+        second = hairobb__v4_add(second, hairobb__v4_mul(hairobb__v4_set1(d2b[i]), point));
     }
-    r = hairobb__maxf(r, 0.0f);
+    hairobb__v4_store(C, value);
+    hairobb__v4_store(T, tangent);
+    hairobb__v4_store(T2, second);
+    r = hairobb__maxf(C[3], 0.0f);
+    dr = T[3];
     for (k = 0; k < 3; ++k) R[k] = rs->org[k] + t * rs->dir[k] - C[k];
     memcpy(hit->tangent, T, sizeof hit->tangent);
     denominator = hairobb__dot3(T, T) - hairobb__dot3(R, T2);
