@@ -7497,16 +7497,24 @@ static float hairobb__tube_falsi(const hairobb__ray_poly *p, float *lo_io, float
    regula falsi took 6. */
 static float hairobb__tube_edge(const hairobb__ray_poly *p, float lo, float hi, float q_lo, float q_hi)
 {
-    float tolerance = (hi - lo) * (1.0f / 16384.0f), u = lo + (hi - lo) * (q_lo / (q_lo - q_hi)), next, at[HAIROBB__TUBE_AT];
+    float tolerance = (hi - lo) * (1.0f / 16384.0f), u = lo + (hi - lo) * (q_lo / (q_lo - q_hi)), next;
     int iteration, lo_inside = q_lo < 0.0f;
     (void)q_hi;
     for (iteration = 0; iteration < 20 && hi - lo > tolerance; ++iteration) {
+        float v[4], d[4], r, q, half_slope;
+        hairobb__v4 d1, value;
         if (!(u > lo && u < hi)) u = 0.5f * (lo + hi);
         if (u <= lo || u >= hi) break;
-        hairobb__tube_at(p, u, at);
-        if (at[4] == 0.0f) return u;
-        if ((at[4] < 0.0f) == lo_inside) lo = u; else hi = u;
-        next = at[5] != 0.0f ? u - at[4] / (2.0f * at[5]) : u;
+        /* q and q' / 2 as hairobb__tube_at rounds them (its out[4], out[5]) */
+        value = hairobb__horner(p, hairobb__v4_set1(u), &d1, NULL);
+        hairobb__v4_store(v, value);
+        hairobb__v4_store(d, d1);
+        r = hairobb__maxf(v[3], 0.0f);
+        q = v[0] * v[0] + v[1] * v[1] - r * r;
+        half_slope = v[0] * d[0] + v[1] * d[1] - r * d[3];
+        if (q == 0.0f) return u;
+        if ((q < 0.0f) == lo_inside) lo = u; else hi = u;
+        next = half_slope != 0.0f ? u - q / (2.0f * half_slope) : u;
         if (fabsf(next - u) <= 0.25f * tolerance)
             /* converged: a point a quarter tolerance past the step's end, on
                the root's side of u (which end of the bracket u became) */
