@@ -7362,14 +7362,17 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
    The inside intervals are found from q at up to HAIROBB__TUBE_SAMPLES + 1
    values of u (spaced 1/32 apart over the part of u where the hull of q's
    Bernstein coefficients reaches 0; 1/16 missed short inside intervals of
-   very curvy segments), their ends refined by regula falsi;
-   a minimum of q between two
-   samples (q' = 2 (w - r r') changes sign there) is found too, so a ray
-   that grazes the tube between samples is not lost. Each inside interval
-   is sampled again at HAIROBB__TUBE_INSIDE_SAMPLES + 1 values, and each
-   sign change of g refined by bisection, which needs no derivative (S's is
-   infinite at the interval's ends): regula falsi. A long interval (a ray
-   along a bent fibre) is sampled at 4x the outer spacing. Two roots of one
+   very curvy segments), their ends refined by Newton steps on q kept in
+   the bracket (hairobb__tube_edge); a minimum of q between two samples
+   (q' = 2 (w - r r') changes sign there) is found too (regula falsi on
+   q'), so a ray that grazes the tube between samples is not lost. Each
+   inside interval is sampled again at HAIROBB__TUBE_INSIDE_SAMPLES + 1
+   values, and each sign change of g that can still give an accepted hit
+   (hairobb__tube_root_unreachable; the exit sheet's after the entry
+   sheet's) refined by Newton steps kept in the bracket, each converged
+   step confirmed by a sign change just past it, since S' is infinite at
+   the interval's ends (hairobb__tube_root). A long interval (a ray along
+   a bent fibre) is sampled at 4x the outer spacing. Two roots of one
    sheet within one step of an inside interval can still be missed. At a
    smooth joint the shared end counts as a root within rounding
    (hairobb__tube_joint), so strands are watertight there. */
@@ -7453,8 +7456,9 @@ static float hairobb__tube_g(const float at[HAIROBB__TUBE_AT], float sheet) { re
 
 /* Regula falsi with the Illinois rule on [*lo, *hi], where f changes sign
    (f_lo, f_hi at the ends): f is q (which 2), q' (3) or, for which -1, the
-   sheet's g. At most `steps` steps, while the bracket is wider than
-   tolerance. Returns the last point tried; *exact is set where f is 0
+   sheet's g (hairobb__tube_split uses it for q', the only one without a
+   derivative at hand). At most `steps` steps, while the bracket is wider
+   than tolerance. Returns the last point tried; *exact is set where f is 0
    there; *lo, *hi: the bracket left. */
 static float hairobb__tube_falsi(const hairobb__ray_poly *p, float *lo_io, float *hi_io, float f_lo, float f_hi, int which,
                                  float sheet, int steps, float tolerance, int *exact)
