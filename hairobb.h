@@ -7365,7 +7365,7 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
    very curvy segments), their ends refined by Newton steps on q kept in
    the bracket (hairobb__tube_edge); a minimum of q between two samples
    (q' = 2 (w - r r') changes sign there) is found too (regula falsi on
-   q'), so a ray that grazes the tube between samples is not lost. Each
+   q', hairobb__tube_low), so a ray that grazes the tube between samples is not lost. Each
    inside interval is sampled again at HAIROBB__TUBE_INSIDE_SAMPLES + 1
    values, and each sign change of g that can still give an accepted hit
    (hairobb__tube_root_unreachable; the exit sheet's after the entry
@@ -7380,6 +7380,16 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
 #define HAIROBB__TUBE_INSIDE_SAMPLES 8
 #define HAIROBB__TUBE_AT 8   /* values hairobb__tube_at gives */
 
+/* From Horner's value v and derivative d (lanes x, y, z, r): q = |P2|^2 -
+   r^2, with *r = max(r, 0) and *w = x x' + y y', rounded as every scalar
+   tube evaluation rounds them (the 8-lane ones repeat these steps). */
+HAIROBB__INLINE float hairobb__tube_q(const float v[4], const float d[4], float *r, float *w)
+{
+    *r = hairobb__maxf(v[3], 0.0f);
+    *w = v[0] * d[0] + v[1] * d[1];
+    return v[0] * v[0] + v[1] * v[1] - *r * *r;
+}
+
 /* at u: out = w, z', z, S, q = |P2|^2 - r^2, q' / 2 = w - r r', |P'|^2,
    |P2|^2 + r^2 (q's scale) */
 static void hairobb__tube_at(const hairobb__ray_poly *p, float u, float out[HAIROBB__TUBE_AT])
@@ -7388,9 +7398,7 @@ static void hairobb__tube_at(const hairobb__ray_poly *p, float u, float out[HAIR
     float v[4], d[4], r, q;
     hairobb__v4_store(v, value);
     hairobb__v4_store(d, d1);
-    r = hairobb__maxf(v[3], 0.0f);
-    q = v[0] * v[0] + v[1] * v[1] - r * r;
-    out[0] = v[0] * d[0] + v[1] * d[1];
+    q = hairobb__tube_q(v, d, &r, &out[0]);
     out[1] = d[2];
     out[2] = v[2];
     out[3] = q < 0.0f ? sqrtf(-q) : 0.0f;
@@ -7454,68 +7462,60 @@ static void hairobb__tube_g_v8(const hairobb__ray_poly *p, const float u_lanes[8
 
 static float hairobb__tube_g(const float at[HAIROBB__TUBE_AT], float sheet) { return at[0] + sheet * at[1] * at[3]; }
 
-/* Regula falsi with the Illinois rule on [*lo, *hi], where f changes sign
-   (f_lo, f_hi at the ends): f is q (which 2), q' (3) or, for which -1, the
-   sheet's g (hairobb__tube_split uses it for q', the only one without a
-   derivative at hand). At most `steps` steps, while the bracket is wider
-   than tolerance. Returns the last point tried; *exact is set where f is 0
-   there; *lo, *hi: the bracket left. */
-static float hairobb__tube_falsi(const hairobb__ray_poly *p, float *lo_io, float *hi_io, float f_lo, float f_hi, int which,
-                                 float sheet, int steps, float tolerance, int *exact)
+/* A point in [lo, hi] where q' changes sign (from negative, slope_lo at
+   lo, to positive): the minimum of q between two outer samples, to 2^-14
+   of the step, by regula falsi with the Illinois rule (q'' is not at
+   hand); an exact zero of q' where one is met. */
+static float hairobb__tube_low(const hairobb__ray_poly *p, float lo, float hi, float slope_lo, float slope_hi)
 {
     int iteration, side = 0;
-    float lo = *lo_io, hi = *hi_io, u = lo;
-    *exact = 0;
-    for (iteration = 0; iteration < steps && hi - lo > tolerance; ++iteration) {
-        float at[HAIROBB__TUBE_AT], f;
-        u = lo + (hi - lo) * (f_lo / (f_lo - f_hi));
+    float tolerance = (hi - lo) * (1.0f / 16384.0f);
+    for (iteration = 0; iteration < 20 && hi - lo > tolerance; ++iteration) {
+        float at[HAIROBB__TUBE_AT], u = lo + (hi - lo) * (slope_lo / (slope_lo - slope_hi));
         if (!(u > lo && u < hi)) u = 0.5f * (lo + hi);
         if (u <= lo || u >= hi) break;
         hairobb__tube_at(p, u, at);
-        f = which < 0 ? hairobb__tube_g(at, sheet) : at[which + 2];
-        if (f == 0.0f) {
-            *exact = 1;
-            break;
-        }
-        if ((f < 0.0f) == (f_lo < 0.0f)) {
+        if (at[5] == 0.0f) return u;
+        if ((at[5] < 0.0f) == (slope_lo < 0.0f)) {
             lo = u;
-            f_lo = f;
-            if (side == -1) f_hi *= 0.5f;
+            slope_lo = at[5];
+            if (side == -1) slope_hi *= 0.5f;
             side = -1;
         } else {
             hi = u;
-            f_hi = f;
-            if (side == 1) f_lo *= 0.5f;
+            slope_hi = at[5];
+            if (side == 1) slope_lo *= 0.5f;
             side = 1;
         }
     }
-    *lo_io = lo;
-    *hi_io = hi;
-    return u;
+    return 0.5f * (lo + hi);
 }
 
-/* hairobb__tube_split for q: Newton steps on q (q' is hairobb__tube_at's
-   out[5] twice), kept in the bracket (halving where a step leaves it);
-   once a step is within a quarter of the tolerance, one point just past
-   its end on the far side closes the bracket. About 3 evaluations where
-   regula falsi took 6. */
+/* An inside interval's end: where q changes sign in [lo, hi] (q_lo at lo,
+   q_hi at hi), to 2^-14 of the step, as the end of the last bracket where
+   q >= 0 (outside, S = 0): there both sheets' g are w, so a root of
+   either sheet just inside the interval's true end still shows as a sign
+   change of g between the last sample and this end (a point inside by
+   rounding gave g a z' S term that could hide it); an exact zero of q
+   where one is met. Newton steps on q (q' / 2 = w - r r'), kept in the
+   bracket (halving where a step leaves it); once a step is within a
+   quarter of the tolerance, one point just past its end on the far side
+   closes the bracket: 4.3 evaluations where regula falsi took 6.1. */
 static float hairobb__tube_edge(const hairobb__ray_poly *p, float lo, float hi, float q_lo, float q_hi)
 {
     float tolerance = (hi - lo) * (1.0f / 16384.0f), u = lo + (hi - lo) * (q_lo / (q_lo - q_hi)), next;
     int iteration, lo_inside = q_lo < 0.0f;
-    (void)q_hi;
     for (iteration = 0; iteration < 20 && hi - lo > tolerance; ++iteration) {
-        float v[4], d[4], r, q, half_slope;
+        float v[4], d[4], r, w, q, half_slope;
         hairobb__v4 d1, value;
         if (!(u > lo && u < hi)) u = 0.5f * (lo + hi);
         if (u <= lo || u >= hi) break;
-        /* q and q' / 2 as hairobb__tube_at rounds them (its out[4], out[5]) */
+        /* q and q' / 2 only (hairobb__tube_at's out[4], out[5]) */
         value = hairobb__horner(p, hairobb__v4_set1(u), &d1, NULL);
         hairobb__v4_store(v, value);
         hairobb__v4_store(d, d1);
-        r = hairobb__maxf(v[3], 0.0f);
-        q = v[0] * v[0] + v[1] * v[1] - r * r;
-        half_slope = v[0] * d[0] + v[1] * d[1] - r * d[3];
+        q = hairobb__tube_q(v, d, &r, &w);
+        half_slope = w - r * d[3];
         if (q == 0.0f) return u;
         if ((q < 0.0f) == lo_inside) lo = u; else hi = u;
         next = half_slope != 0.0f ? u - q / (2.0f * half_slope) : u;
@@ -7528,21 +7528,17 @@ static float hairobb__tube_edge(const hairobb__ray_poly *p, float lo, float hi, 
     return lo_inside ? hi : lo;
 }
 
-/* A point in [lo, hi] where q (which 2) or q' (which 3) changes sign (f_lo
-   at lo), to 2^-14 of the step. For q, the end of the last bracket where q
-   >= 0 (outside, S = 0): there both sheets' g are w, so a root of either
-   sheet just inside the interval's true end still shows as a sign change
-   of g between the last sample and this end (a point inside by rounding
-   gave g a z' S term that could hide it). */
-static float hairobb__tube_split(const hairobb__ray_poly *p, float lo, float hi, float f_lo, float f_hi, int which)
+/* u at samples first .. first + 7 of [a, b] cut into `samples` steps:
+   sample 0 is a and sample `samples` b exactly, and lanes past it are b. */
+static void hairobb__tube_sample_u(float a, float b, int samples, int first, float out[8])
 {
-    /* q and q' are smooth polynomials: the bracket closes in a few steps
-       where halving took 14 */
-    int exact;
-    float u;
-    if (which == 2) return hairobb__tube_edge(p, lo, hi, f_lo, f_hi);
-    u = hairobb__tube_falsi(p, &lo, &hi, f_lo, f_hi, which, 0.0f, 20, (hi - lo) * (1.0f / 16384.0f), &exact);
-    return exact ? u : 0.5f * (lo + hi);
+    static const float lane_index[8] = {0.0f, 1.0f, 2.0f, 3.0f, 4.0f, 5.0f, 6.0f, 7.0f};
+    hairobb__v8 step = hairobb__v8_div(hairobb__v8_add(hairobb__v8_set1((float)first), hairobb__v8_load(lane_index)),
+                                       hairobb__v8_set1((float)samples));
+    int lane;
+    hairobb__v8_store(out, hairobb__v8_add(hairobb__v8_set1(a), hairobb__v8_mul(hairobb__v8_set1(b - a), step)));
+    for (lane = samples - first; lane < 8; ++lane) out[lane] = b;   /* first <= samples */
+    if (first == 0) out[0] = a;
 }
 
 /* A sheet's g (as hairobb__tube_g rounds it) and its derivative at u:
@@ -7554,10 +7550,8 @@ static float hairobb__tube_g_slope(const hairobb__ray_poly *p, float u, float sh
     hairobb__v4_store(v, value);
     hairobb__v4_store(d, d1);
     hairobb__v4_store(dd, d2);
-    r = hairobb__maxf(v[3], 0.0f);
-    q = v[0] * v[0] + v[1] * v[1] - r * r;
+    q = hairobb__tube_q(v, d, &r, &w);
     root_s = q < 0.0f ? sqrtf(-q) : 0.0f;
-    w = v[0] * d[0] + v[1] * d[1];
     *slope = d[0] * d[0] + d[1] * d[1] + v[0] * dd[0] + v[1] * dd[1] +
              sheet * (dd[2] * root_s - (root_s > 0.0f ? d[2] * (w - r * d[3]) / root_s : 0.0f));
     return w + sheet * d[2] * root_s;
@@ -7732,7 +7726,6 @@ static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__ray_poly 
        twice) at the outer samples' spacing at least */
     int k, first, lane, side, found = 0, exit_count = 0, samples = (int)((b - a) * (float)(4 * HAIROBB__TUBE_SAMPLES)) + 1;
     unsigned carry_negative[2] = {0u, 0u}, carry_exact[2] = {0u, 0u};
-    static const float lane_index[8] = {0.0f, 1.0f, 2.0f, 3.0f, 4.0f, 5.0f, 6.0f, 7.0f};
     if (samples < HAIROBB__TUBE_INSIDE_SAMPLES) samples = HAIROBB__TUBE_INSIDE_SAMPLES;
     if (a == 0.0f) {
         hairobb__tube_at(p, a, ends);
@@ -7745,12 +7738,7 @@ static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__ray_poly 
        visited, in order, entry sheet first */
     for (first = 0; first <= samples; first += 8) {
         unsigned valid = first + 8 <= samples + 1 ? 0xffu : (1u << (samples + 1 - first)) - 1u, events = 0, zero[2], change[2];
-        hairobb__v8 u_vector = hairobb__v8_add(hairobb__v8_set1((float)first), hairobb__v8_load(lane_index));
-        u_vector = hairobb__v8_div(u_vector, hairobb__v8_set1((float)samples));
-        hairobb__v8_store(u_lanes, hairobb__v8_add(hairobb__v8_set1(a), hairobb__v8_mul(hairobb__v8_set1(b - a), u_vector)));
-        for (lane = samples - first; lane < 8; ++lane)
-            if (lane >= 0) u_lanes[lane] = b;   /* k = samples, and spare lanes */
-        if (first == 0) u_lanes[0] = a;
+        hairobb__tube_sample_u(a, b, samples, first, u_lanes);
         hairobb__tube_g_v8(p, u_lanes, g_lanes[0], g_lanes[1], z_lanes);
         for (side = 0; side < 2; ++side) {
             hairobb__v8 g = hairobb__v8_load(g_lanes[side]), zero_v = hairobb__v8_set1(0.0f);
@@ -7836,9 +7824,8 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
     float at_end[HAIROBB__TUBE_AT], start = -1.0f, bernstein[7] = {0, 0, 0, 0, 0, 0, 0}, scale = 0.0f;
     float sample_u[HAIROBB__TUBE_SAMPLES + 8], sample_q[HAIROBB__TUBE_SAMPLES + 8], sample_slope[HAIROBB__TUBE_SAMPLES + 8];
     float min_tangent2 = 0.0f, margin, u_lo, u_hi, reach[2] = {0.0f, 0.0f};
-    int k, samples, found = 0, first_below, last_below, first, lane;
+    int k, samples, found = 0, first_below, last_below, first;
     unsigned nonpositive = 0, carry_inside = 0, carry_negative = 0;
-    static const float lane_index[8] = {0.0f, 1.0f, 2.0f, 3.0f, 4.0f, 5.0f, 6.0f, 7.0f};
     /* q's Bernstein coefficients bound it: all of them clearly positive,
        the ray passes farther than r from the centre line everywhere (most
        segments that pass the ribbon's cull) */
@@ -7890,11 +7877,7 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
     /* q and q' at every sample first, 8 at a time (at most 33 + 1; a last
        partial group's spare lanes at u_hi) */
     for (first = 0; first <= samples; first += 8) {
-        hairobb__v8 u_vector = hairobb__v8_add(hairobb__v8_set1((float)first), hairobb__v8_load(lane_index));
-        u_vector = hairobb__v8_div(u_vector, hairobb__v8_set1((float)samples));
-        hairobb__v8_store(sample_u + first, hairobb__v8_add(hairobb__v8_set1(u_lo), hairobb__v8_mul(hairobb__v8_set1(u_hi - u_lo), u_vector)));
-        for (lane = samples - first; lane < 8; ++lane) sample_u[first + lane] = u_hi;
-        if (first == 0) sample_u[0] = u_lo;
+        hairobb__tube_sample_u(u_lo, u_hi, samples, first, sample_u + first);
         hairobb__tube_q_v8(&poly, sample_u + first, sample_q + first, sample_slope + first);
     }
     if (bvh->end_caps && u_lo == 0.0f && sample_q[0] <= 0.0f) {
@@ -7923,18 +7906,18 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
             q_previous = sample_q[k - 1];
             q = sample_q[k];
             if (start < 0.0f && q < 0.0f) {   /* into an inside interval */
-                start = hairobb__tube_split(&poly, u_previous, u, q_previous, q, 2);
+                start = hairobb__tube_edge(&poly, u_previous, u, q_previous, q);
             } else if (start >= 0.0f && !(q < 0.0f)) {   /* out of it */
-                found |= hairobb__tube_inside(rs, &poly, prim, start, hairobb__tube_split(&poly, u_previous, u, q_previous, q, 2),
+                found |= hairobb__tube_inside(rs, &poly, prim, start, hairobb__tube_edge(&poly, u_previous, u, q_previous, q),
                                               min_tangent2, reach, any_hit);
                 start = -1.0f;
             } else if (start < 0.0f && sample_slope[k - 1] < 0.0f && sample_slope[k] > 0.0f) {
                 /* both outside, but q has a minimum between them: inside there? */
-                float low = hairobb__tube_split(&poly, u_previous, u, sample_slope[k - 1], sample_slope[k], 3), at[HAIROBB__TUBE_AT];
+                float low = hairobb__tube_low(&poly, u_previous, u, sample_slope[k - 1], sample_slope[k]), at[HAIROBB__TUBE_AT];
                 hairobb__tube_at(&poly, low, at);
                 if (at[4] < 0.0f)
-                    found |= hairobb__tube_inside(rs, &poly, prim, hairobb__tube_split(&poly, u_previous, low, q_previous, at[4], 2),
-                                                  hairobb__tube_split(&poly, low, u, at[4], q, 2), min_tangent2, reach, any_hit);
+                    found |= hairobb__tube_inside(rs, &poly, prim, hairobb__tube_edge(&poly, u_previous, low, q_previous, at[4]),
+                                                  hairobb__tube_edge(&poly, low, u, at[4], q), min_tangent2, reach, any_hit);
             }
             if (found && any_hit) return 1;
         }
@@ -8784,9 +8767,10 @@ HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairob
 #define hairobb__tube_g_slope hairobb__tube_g_slope_avx2
 #define hairobb__tube_root_unreachable hairobb__tube_root_unreachable_avx2
 #define hairobb__tube_exits hairobb__tube_exits_avx2
-#define hairobb__tube_split hairobb__tube_split_avx2
 #define hairobb__tube_edge hairobb__tube_edge_avx2
-#define hairobb__tube_falsi hairobb__tube_falsi_avx2
+#define hairobb__tube_low hairobb__tube_low_avx2
+#define hairobb__tube_q hairobb__tube_q_avx2
+#define hairobb__tube_sample_u hairobb__tube_sample_u_avx2
 #define hairobb__tube_squares hairobb__tube_squares_avx2
 #define hairobb__tube_q_v8 hairobb__tube_q_v8_avx2
 #define hairobb__horner_v8 hairobb__horner_v8_avx2
