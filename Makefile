@@ -30,8 +30,8 @@ TESTS = $(QUICK) $(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_
 # (any report aborts the test), the threads test under ThreadSanitizer, and
 # the fuzzers (clang); named first, as the longest, since the tests run two
 # at a time on 2 cores
-SANITIZED = $(B)/fuzz_build_60s $(B)/asan_test_options $(B)/fuzz_hair_30s $(B)/fuzz_load_30s $(B)/asan_test_unit_w8 $(B)/asan_test_stress \
-            $(B)/tsan_test_threads $(B)/asan_test_reference $(B)/asan_test_save_w4 $(B)/asan_test_scene
+SANITIZED = $(B)/fuzz_build_60s $(B)/asan_test_options $(B)/fuzz_hair_30s $(B)/fuzz_load_30s $(B)/asan_test_round $(B)/asan_test_unit_w8 \
+            $(B)/asan_test_stress $(B)/tsan_test_threads $(B)/asan_test_reference $(B)/asan_test_save_w4 $(B)/asan_test_scene
 ASAN      = -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 TSAN      = -O1 -g -fsanitize=thread
 # libFuzzer targets (clang): 60 s in `make test`, `make fuzz` for a long run
@@ -113,11 +113,13 @@ $(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_bases $(B)/test_s
 # under AddressSanitizer + UndefinedBehaviorSanitizer, and ThreadSanitizer:
 # -O1 and the sanitizer in place of CFLAGS
 $(B)/asan_%: $(TEST_HEADERS) | $(B)
-	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) $(TEST_FLAGS_$(@F)) $(filter %.c,$^) -o $@ $(LIBS)
+	$(CC) $(WARN) $(ASAN) -ffp-contract=off -I. $(ARCH) $(TEST_FLAGS_$(@F)) $(filter %.c,$^) -o $@ $(if $(filter %round,$@),$(EMBREE)) $(LIBS)
 $(B)/tsan_%: $(TEST_HEADERS) | $(B)
 	$(CC) $(WARN) $(TSAN) -ffp-contract=off -I. $(ARCH) $(filter %.c,$^) -o $@ $(LIBS)
 $(B)/asan_test_reference: tests/test_reference.c
 $(B)/asan_test_scene: tests/test_scene.c
+# round curves' stress and degenerate segments (and their Embree comparison)
+$(B)/asan_test_round: tests/test_round.c | deps
 $(B)/asan_test_options: tests/test_options.c
 $(B)/asan_test_stress: tests/test_stress.c
 $(B)/asan_test_save_w4: tests/test_save.c

@@ -7753,7 +7753,7 @@ static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__ray_poly 
             events |= change[side] | zero[side];
         }
         if (first == 0) {
-            events = (events & ~1u) | (zero[0] | zero[1]) << 1;   /* u = a: a root of k = 1's */
+            events = (events & ~1u) | ((zero[0] | zero[1]) & 1u) << 1;   /* u = a: a root of k = 1's (lane 0 only) */
             g_previous[0] = g_lanes[0][0];
             g_previous[1] = g_lanes[1][0];
             z_previous = z_lanes[0];

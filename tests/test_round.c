@@ -1382,6 +1382,56 @@ static void test_caps_and_back_faces(void)
     }
 }
 
+/* A zero-length segment (every control point equal; in the linear basis,
+   two equal points) has no circle anywhere: rays through it, on the AVX2
+   (where this CPU has it) and SSE2 paths, take well-formed hits or none,
+   the same on both. A read past a stack array of 8 floats (the inside
+   samples' lane 8) once followed the zero g there: make test runs this
+   under ASan and UBSan (asan_test_round). */
+static void test_zero_length(void)
+{
+    static const float v[16] = {5, 5, 5, 0.05f, 5, 5, 5, 0.05f, 5, 5, 5, 0.05f, 5, 5, 5, 0.05f};
+    static const uint32_t idx[1] = {0};
+    static const hairobb_basis bases[2] = {HAIROBB_BASIS_BEZIER, HAIROBB_BASIS_LINEAR};
+    static const hairobb_simd paths[2] = {HAIROBB_SIMD_AUTO, HAIROBB_SIMD_SSE2};
+    size_t rays = 0, differ = 0, malformed = 0;
+    int b, caps, p, i;
+    for (b = 0; b < 2; ++b)
+        for (caps = 0; caps < 2; ++caps) {
+            hairobb_bvh *bvh[2] = {NULL, NULL};
+            hairobb_build_options o = hairobb_default_options();
+            o.shape = HAIROBB_SHAPE_ROUND;
+            o.basis = bases[b];
+            o.end_caps = caps ? HAIROBB_ON : HAIROBB_OFF;
+            for (p = 0; p < 2; ++p) {
+                o.simd = paths[p];
+                CHECK(hairobb_build(v, 4, idx, 1, &o, &bvh[p]) == HAIROBB_OK, "zero length, basis %d, caps %d: builds", b, caps);
+            }
+            for (i = 0; bvh[0] && bvh[1] && i < 400; ++i) {
+                /* the ray (0.01 off the point, along z), then others within r of it every way */
+                double a = 0.0157 * i, c = cos(a), s = sin(a), off = 0.0001 * (i % 97);
+                hairobb_ray ray = {{5.01f, 5.0f, 0.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY, 0.0f};
+                hairobb_hit hit[2];
+                int got[2];
+                if (i > 0) {
+                    ray.dir[0] = (float)(c * s);
+                    ray.dir[1] = (float)(s * s);
+                    ray.dir[2] = (float)c;
+                    ray.org[0] = (float)(5.0 + off - 2.0 * ray.dir[0]);
+                    ray.org[1] = (float)(5.0 - off - 2.0 * ray.dir[1]);
+                    ray.org[2] = (float)(5.0 - 2.0 * ray.dir[2]);
+                }
+                for (p = 0; p < 2; ++p) got[p] = hairobb_intersect1(bvh[p], &ray, &hit[p]);
+                ++rays;
+                differ += !same_hit(got[0], &hit[0], got[1], &hit[1]);
+                malformed += got[0] && !(isfinite(hit[0].t) && hit[0].t >= 0.0f && hit[0].u >= 0.0f && hit[0].u <= 1.0f);
+            }
+            for (p = 0; p < 2; ++p) hairobb_free(bvh[p]);
+        }
+    printf("zero-length segments: %zu rays, %zu malformed hits, %zu differ between AVX2 and SSE2\n", rays, malformed, differ);
+    CHECK(rays == 1600 && malformed == 0 && differ == 0, "zero-length segments: %zu malformed, %zu differ", malformed, differ);
+}
+
 /* Options a round BVH must refuse or keep. */
 static void test_options(void)
 {
@@ -1447,6 +1497,7 @@ int main(void)
     test_stress_motion();
     test_stress_secondary_at_joints();
     test_caps_and_back_faces();
+    test_zero_length();
     if (scene_combed(&s, 20000, 1) == 0) {
         test_save_refit(&s);
         compare_with_reference("combed", &s, &round);
