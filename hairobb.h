@@ -197,7 +197,12 @@
      Round curves (options.shape = HAIROBB_SHAPE_ROUND) are tubes instead:
      at each u a circle of radius r(u) about P(u) in the plane normal to
      P'(u) (Embree's cubic round curves; not a sweep of spheres, which is
-     fatter where the radius tapers). The ends are open, as Embree's;
+     fatter where the radius tapers). There is no circle where P'
+     vanishes (|P'| under 2^-12 of 3 times the control polygon's longest
+     leg, or under 16 FLT_EPSILON of the largest |coordinate|): a zero-length
+     segment (every point equal, in any basis) has no tube, and a cusp or
+     a repeated control point leaves no surface at that u. The ends are
+     open, as Embree's;
      options.end_caps = HAIROBB_ON closes each free end with a flat cap,
      the disk of radius r normal to P' there, whose hits report u exactly 0
      or 1 and Ng = -P'(0) or P'(1), unit. An end is free where it is no
@@ -7659,11 +7664,13 @@ static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__ray_poly *p,
    at depth z + w / z' (hairobb__intersect_tube's terms), at distance^2 q +
    r^2 + (w / z')^2 from the centre. A ray going along the outward normal
    (-P' at end 0, P' at end 1) leaves the fibre there: an exit (sheet -1). */
-static int hairobb__tube_cap(const hairobb_bvh *bvh, hairobb__ray_state *rs, const float at[HAIROBB__TUBE_AT], uint32_t prim, int end)
+static int hairobb__tube_cap(const hairobb_bvh *bvh, hairobb__ray_state *rs, const float at[HAIROBB__TUBE_AT], uint32_t prim, int end,
+                             float min_tangent2)
 {
     float along = at[1], offset, t, sheet;
     int taken;
-    if (!(along != 0.0f)) return 0;   /* the ray in the cap's plane */
+    /* the ray in the cap's plane, or no plane (hairobb__tube_hit) */
+    if (!(along != 0.0f) || !(at[6] > min_tangent2)) return 0;
     offset = at[0] / along;
     if (!(at[4] + offset * offset <= 0.0f)) return 0;
     sheet = (along > 0.0f) == (end == 0) ? 1.0f : -1.0f;
@@ -7817,8 +7824,8 @@ static void hairobb__tube_squares(const float a[4], float sign, float out[7])
     out[6] += sign * (a[3] * a[3]);
 }
 
-static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *rs, const hairobb__ray_curve *c, uint32_t prim,
-                                   int any_hit)
+static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *rs, const hairobb__ray_curve *c, const float *cp,
+                                   uint32_t prim, int any_hit)
 {
     hairobb__ray_poly poly;
     float at_end[HAIROBB__TUBE_AT], start = -1.0f, bernstein[7] = {0, 0, 0, 0, 0, 0, 0}, scale = 0.0f;
@@ -7870,6 +7877,16 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
         min_tangent2 = hairobb__maxf(min_tangent2, 9.0f * (dx * dx + dy * dy + dz * dz));
     }
     min_tangent2 *= 1.0f / 16777216.0f;
+    {
+        /* and below (16 eps M)^2, M the largest world coordinate: a basis
+           converted to Bezier rounds each point by a few ulps of M, so a
+           segment of equal points (zero length) keeps a tangent of
+           rounding noise, a disk in a random plane */
+        hairobb__v4 lo = hairobb__v4_max(hairobb__v4_abs(hairobb__v4_load(cp)), hairobb__v4_abs(hairobb__v4_load(cp + 4)));
+        hairobb__v4 hi = hairobb__v4_max(hairobb__v4_abs(hairobb__v4_load(cp + 8)), hairobb__v4_abs(hairobb__v4_load(cp + 12)));
+        float noise = hairobb__v4_hmax(hairobb__v4_max(lo, hi)) * (16.0f * FLT_EPSILON);
+        min_tangent2 = hairobb__maxf(min_tangent2, noise * noise);
+    }
     /* bounds on |z'| and r over the segment (hairobb__tube_root_unreachable) */
     for (k = 0; k < 3; ++k) reach[0] = hairobb__maxf(reach[0], 3.0f * fabsf(c->z[k + 1] - c->z[k]));
     for (k = 0; k < 4; ++k) reach[1] = hairobb__maxf(reach[1], c->r[k]);
@@ -7882,7 +7899,7 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
     }
     if (bvh->end_caps && u_lo == 0.0f && sample_q[0] <= 0.0f) {
         hairobb__tube_at(&poly, u_lo, at_end);
-        if ((found = hairobb__tube_cap(bvh, rs, at_end, prim, 0)) && any_hit) return 1;
+        if ((found = hairobb__tube_cap(bvh, rs, at_end, prim, 0, min_tangent2)) && any_hit) return 1;
     }
     if (sample_q[0] < 0.0f) start = u_lo;   /* inside at the open end (or by rounding at u_lo) */
     /* the samples k where q goes in (q < 0) or out, or where q' goes from
@@ -7926,7 +7943,7 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
     if (found && any_hit) return 1;
     if (bvh->end_caps && u_hi == 1.0f && sample_q[samples] <= 0.0f) {
         hairobb__tube_at(&poly, u_hi, at_end);
-        found |= hairobb__tube_cap(bvh, rs, at_end, prim, 1);
+        found |= hairobb__tube_cap(bvh, rs, at_end, prim, 1, min_tangent2);
     }
     return found;
 }
@@ -8012,7 +8029,7 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
         hairobb__v4_store(c.x, hairobb__ray_row_v4(rs, 0, qx, qy, qz));
         hairobb__v4_store(c.y, hairobb__ray_row_v4(rs, 1, qx, qy, qz));
         hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));
-        if (!hairobb__intersect_tube(bvh, rs, &c, prim, any_hit)) return 0;
+        if (!hairobb__intersect_tube(bvh, rs, &c, cp, prim, any_hit)) return 0;
     } else {
         rs->segment_points = cp;
         if (!hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit)) return 0;

@@ -293,6 +293,17 @@ static inline int ref_tube_segment_hit(const ref__ray *ray, const float *ctrl, d
             T2[k] = d2[0] * ray->axis_x[k] + d2[1] * ray->axis_y[k] + d2[2] * ray->axis_z[k];
             R[k] = X[k] - C[k];
         }
+        {
+            /* Where c' vanishes (a cusp, a collinear curve turning back,
+               repeated control points) H has a root for any ray, whose
+               depth s = z + w / z' is a ratio of vanishing terms: a hit
+               only where X is on that u's circle, within the rounding of
+               the polished root (1e-6 r, and 1e-12 of the coordinates) */
+            double tolerance = 1e-6 * radius + 1e-12 * (sqrt(ref__dot3(C, C)) + sqrt(ref__dot3(X, X))), tangent = sqrt(ref__dot3(T, T));
+            if (!(tangent > 0.0) || !(fabs(sqrt(ref__dot3(R, R)) - radius) <= tolerance) ||
+                !(fabs(ref__dot3(R, T)) <= tolerance * tangent))
+                continue;
+        }
         denominator = ref__dot3(T, T) - ref__dot3(R, T2);
         rc = denominator != 0.0 ? radius * dr / denominator : 0.0;
         for (k = 0; k < 3; ++k) n[k] = R[k] - rc * T[k];
