@@ -248,7 +248,9 @@
      set. A filter sees each crossing of the ray once: where two pieces of
      a segment, or two segments at a strand's joint, find the same
      crossing, the second is not shown again once a filter has ignored the
-     first (a transmittance product stays right).
+     first (a transmittance product stays right). A tube's entry and exit
+     are two crossings, however near its silhouette: the filter is shown
+     both, as stepping intersect1 past each hit finds both.
      Per-call filters: hairobb_intersect1_context / hairobb_occluded1_context
      take a hairobb_context, a filter and its user pointer for that call
      (a ray's medium, depth or transmittance), called after the BVH's own
@@ -1626,7 +1628,10 @@ static const char *hairobb__bad_option(const hairobb_build_options *o, int purpo
         for (k = 0; k < o->time_steps; ++k)
             if (!o->time_vertices[k]) return "time_vertices";
     }
-    if (purpose == HAIROBB__FOR_LOAD) return (unsigned)o->verify_hair > HAIROBB_OFF ? "verify_hair" : NULL;
+    /* read by a load only, but judged for both: hairobb_check_options
+       names every field out of range that either call refuses */
+    if ((unsigned)o->verify_hair > HAIROBB_OFF) return "verify_hair";
+    if (purpose == HAIROBB__FOR_LOAD) return NULL;
     if ((unsigned)o->nodes > HAIROBB_NODES_OBB_ONLY) return "nodes";
     if ((unsigned)o->precision > HAIROBB_PRECISION_PIECES) return "precision";
     if ((unsigned)o->obb_layout > HAIROBB_OBB_COMPRESSED_PER_CHILD) return "obb_layout";
@@ -5971,7 +5976,8 @@ typedef struct hairobb__ray_curve {
    (the last HAIROBB__SHOWN, and apart the last HAIROBB__SHOWN within
    2^-10 of a segment's end, which a joint's other segment may find after
    many others), and one found again (the same segment at the same u, or
-   the two segments of a joint at its point) is not shown. */
+   the two segments of a joint at its point, on the same side of a tube:
+   its entry and exit are two crossings however close) is not shown. */
 #define HAIROBB__SHOWN 8
 /* An instance of a scene as the tracing reads it (SCENES, >>scene). */
 typedef struct hairobb__placed {
@@ -5990,6 +5996,7 @@ typedef struct hairobb__ray_state {
     int ignored_count[2];       /* candidates the filters ignored: all, those at ends; the last HAIROBB__SHOWN of each: */
     uint32_t ignored_prim[2][HAIROBB__SHOWN];
     float ignored_u[2][HAIROBB__SHOWN], ignored_t[2][HAIROBB__SHOWN];
+    int ignored_exit[2][HAIROBB__SHOWN];   /* tubes: the crossing left the fibre (outward Ng along the ray) */
     const hairobb_bvh *bvh;     /* set with a hit filter only: what it is called with */
     const hairobb_ray *ray;     /* the caller's */
     float org[3], dir[3];
@@ -8211,8 +8218,9 @@ static int hairobb__shares_end(const hairobb_bvh *bvh, uint32_t prim, int end, f
 
 /* Whether the filters ignored this crossing already (HAIROBB__SHOWN): the
    same segment within 2^-10 of u, or at a joint the neighbour's matching
-   end, at a t within r / 64 of the segment (plus t's rounding). */
-static int hairobb__ignored_before(const hairobb__ray_state *rs, uint32_t prim, float u, float t, const float *cp)
+   end, at a t within r / 64 of the segment (plus t's rounding), on the
+   same side of a tube (exit: 1 where the ray leaves it; ribbons 0). */
+static int hairobb__ignored_before(const hairobb__ray_state *rs, uint32_t prim, float u, float t, int exit, const float *cp)
 {
     const float near_end = 1.0f / 1024.0f;
     float close = hairobb__maxf(cp[3], cp[15]) * (1.0f / 64.0f) * rs->inv_dir_length + fabsf(t) * (1.0f / 65536.0f);
@@ -8222,7 +8230,7 @@ static int hairobb__ignored_before(const hairobb__ray_state *rs, uint32_t prim, 
         for (i = 0; i < kept; ++i) {
             uint32_t other = rs->ignored_prim[list][i];
             float other_u = rs->ignored_u[list][i];
-            if (!(fabsf(rs->ignored_t[list][i] - t) <= close)) continue;
+            if (!(fabsf(rs->ignored_t[list][i] - t) <= close) || rs->ignored_exit[list][i] != exit) continue;
             if (other == prim && fabsf(other_u - u) <= near_end) return 1;
             if (end == 1 && other == prim + 1 && other_u <= near_end && hairobb__shares_end(rs->bvh, prim, 1, rs->time, cp)) return 1;
             if (end == 0 && other + 1 == prim && other_u >= 1.0f - near_end && hairobb__shares_end(rs->bvh, prim, 0, rs->time, cp))
@@ -8239,14 +8247,16 @@ static int hairobb__hit_filtered_out(hairobb__ray_state *rs, uint32_t prim, floa
     hairobb__v4 qx, qy, qz, r;
     float scratch[16];
     const float *cp = hairobb__segment_points(rs->bvh, prim, rs->time, scratch);
-    int slot, list;
-    if (hairobb__ignored_before(rs, prim, u, t, cp)) return 1;
+    int slot, list, exit;
     hairobb__ray_points_v4(rs->org, cp, &qx, &qy, &qz, &r);
     hairobb__v4_store(c.x, hairobb__ray_row_v4(rs, 0, qx, qy, qz));
     hairobb__v4_store(c.y, hairobb__ray_row_v4(rs, 1, qx, qy, qz));
     hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));
     hairobb__v4_store(c.r, r);
+    /* the hit first: a tube's side is its normal's (a ribbon's faces the ray) */
     hairobb__hit_at(rs->bvh, rs, prim, NULL, &c, u, t, rs->cap_candidate, &hit);
+    exit = rs->bvh->shape == HAIROBB_SHAPE_ROUND && hairobb__dot3(hit.Ng, rs->dir) > 0.0f;
+    if (hairobb__ignored_before(rs, prim, u, t, exit, cp)) return 1;
     if (rs->placed) hairobb__hit_to_world(rs->placed, rs->instance_id, &hit);
     if ((!rs->hit_filter || rs->hit_filter(rs->hit_filter_user, rs->ray, &hit)) &&
         (!rs->call_filter || rs->call_filter(rs->call_filter_user, rs->ray, &hit)))
@@ -8257,6 +8267,7 @@ static int hairobb__hit_filtered_out(hairobb__ray_state *rs, uint32_t prim, floa
         rs->ignored_prim[list][slot] = prim;
         rs->ignored_u[list][slot] = u;
         rs->ignored_t[list][slot] = t;
+        rs->ignored_exit[list][slot] = exit;
     }
     return 1;
 }

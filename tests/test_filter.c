@@ -12,7 +12,9 @@
    too (rays aimed across segments at u = k/8). A per-call filter gives
    what the same filter built in gives, reaches the call's data, and with
    the BVH's own takes the nearest hit both take; an occlusion filter
-   leaves intersect1 alone. */
+   leaves intersect1 alone. On tubes a filter taking none is shown the
+   crossings stepping intersect1 finds, entry and exit apart however near
+   the silhouette. */
 #define _POSIX_C_SOURCE 200809L
 #define HAIROBB_IMPLEMENTATION
 #include "../hairobb.h"
@@ -284,6 +286,113 @@ static void test_context(const hair_scene *s, const ref_scene *reference, const 
     hairobb_free(split);
 }
 
+/* A tube's entry and exit are two crossings however close: a filter that
+   takes none is shown what stepping intersect1 past each hit finds (tnear
+   just past it), the same count at the same t, the BVH's own filter and a
+   per-call one alike. Rays along y past a straight tube along x at
+   z = r (1 - 10^-k) (chords down to 0.0045 r), and shadow rays between
+   random points of a scene's box, its hair as tubes. */
+static size_t stepped_crossings(const hairobb_bvh *bvh, hairobb_ray ray, float *t, size_t capacity)
+{
+    size_t n = 0;
+    hairobb_hit hit;
+    while (n < capacity && hairobb_intersect1(bvh, &ray, &hit)) {
+        t[n++] = hit.t;
+        ray.tnear = nextafterf(hit.t, INFINITY);
+    }
+    return n;
+}
+
+static int compare_floats(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return x < y ? -1 : x > y;
+}
+
+static void tube_crossings(const char *name, const float *vertices, size_t vertex_count, const uint32_t *indices, size_t segments,
+                           const float (*org)[3], const float (*dir)[3], size_t rays)
+{
+    hairobb_build_options o = hairobb_default_options();
+    hairobb_bvh *filtered = NULL, *plain = NULL;
+    shown_list list;
+    hairobb_context context;
+    size_t i, k, differ = 0, crossings = 0;
+    int call;
+    o.shape = HAIROBB_SHAPE_ROUND;
+    CHECK(hairobb_build(vertices, vertex_count, indices, segments, &o, &plain) == HAIROBB_OK, "%s: builds", name);
+    o.hit_filter = record_all;
+    o.hit_filter_user = &list;
+    CHECK(hairobb_build(vertices, vertex_count, indices, segments, &o, &filtered) == HAIROBB_OK, "%s: builds with a filter", name);
+    if (!plain || !filtered) return;
+    context.filter = record_all;
+    context.user = &list;
+    context.mask = 0;
+    for (i = 0; i < rays; ++i) {
+        hairobb_ray ray;
+        hairobb_hit hit;
+        float stepped[MAX_SHOWN];
+        size_t n;
+        memcpy(ray.org, org[i], sizeof ray.org);
+        memcpy(ray.dir, dir[i], sizeof ray.dir);
+        ray.tnear = 0.0f;
+        ray.tfar = 1.0f;   /* a shadow ray's segment */
+        ray.time = 0.0f;
+        n = stepped_crossings(plain, ray, stepped, MAX_SHOWN);
+        crossings += n;
+        for (call = 0; call < 2; ++call) {
+            int bad;
+            list.count = 0;
+            if (call == 0) hairobb_intersect1(filtered, &ray, &hit);
+            else hairobb_intersect1_context(plain, &context, NULL, &ray, &hit);
+            if (list.count == MAX_SHOWN || n == MAX_SHOWN) continue;   /* too many to compare */
+            qsort(list.t, list.count, sizeof list.t[0], compare_floats);
+            bad = list.count != n;
+            for (k = 0; !bad && k < n; ++k) bad = list.t[k] != stepped[k];
+            if (bad && differ < 3)
+                printf("  %s ray %zu (%s filter): shown %zu crossings, stepping finds %zu (first t %.9g)\n", name, i,
+                       call ? "per-call" : "the BVH's", list.count, n, n ? (double)stepped[0] : 0.0);
+            differ += (size_t)bad;
+        }
+    }
+    printf("%s as tubes: %zu rays, %zu crossings stepping intersect1; a filter taking none (the BVH's, per call) is shown "
+           "other crossings on %zu\n", name, rays, crossings, differ);
+    CHECK(differ == 0 && crossings > rays / 2, "%s tubes: the filter is shown other crossings than stepping finds on %zu rays (%zu crossings)",
+          name, differ, crossings);
+    hairobb_free(filtered);
+    hairobb_free(plain);
+}
+
+static void test_tube_crossings(const hair_scene *s)
+{
+    enum { GRAZING = 700, RANDOM = 4000 };
+    static const float tube[16] = {-1, 0, 0, 0.1f, 0, 0, 0, 0.1f, 1, 0, 0, 0.1f, 2, 0, 0, 0.1f};
+    static const uint32_t one[1] = {0};
+    static float org[RANDOM][3], dir[RANDOM][3];
+    uint64_t state = 31;
+    size_t i;
+    int k;
+    for (i = 0; i < GRAZING; ++i) {
+        double eps = pow(10.0, -1.0 - 6.0 * (double)i / GRAZING);
+        org[i][0] = (float)(-0.5 + 2.0 * lcg64_double(&state));
+        org[i][1] = -1.0f;
+        org[i][2] = (float)(0.1 * (1.0 - eps)) * (i & 1 ? 1.0f : -1.0f);
+        dir[i][0] = 0.0f;
+        dir[i][1] = 2.0f;
+        dir[i][2] = 0.0f;
+    }
+    tube_crossings("a straight tube grazed at r (1 - 10^-k)", tube, 4, one, 1, (const float (*)[3])org, (const float (*)[3])dir, GRAZING);
+    /* shadow rays: from a point in the hair's box to another */
+    for (i = 0; i < RANDOM; ++i)
+        for (k = 0; k < 3; ++k) {
+            float a = s->lower[k] + (s->upper[k] - s->lower[k]) * (float)lcg64_double(&state);
+            float b = s->lower[k] + (s->upper[k] - s->lower[k]) * (float)lcg64_double(&state);
+            org[i][k] = a;
+            dir[i][k] = b - a;
+        }
+    tube_crossings(s->name, s->vertices, s->vertex_count, s->indices, s->segment_count, (const float (*)[3])org,
+                   (const float (*)[3])dir, RANDOM);
+}
+
 int main(void)
 {
     hair_scene s;
@@ -353,6 +462,7 @@ int main(void)
     CHECK(calls > hits, "the filter was called (%zu)", calls);
     CHECK(plain_differs == 0, "a filter taking every hit changed %zu rays", plain_differs);
     test_each_crossing_once("combed 50k", &s, org, dir, rays);
+    test_tube_crossings(&s);
     test_context(&s, reference, org, dir, rays, bvh);
     hairobb_free(bvh);
     hairobb_free(plain);
@@ -364,6 +474,7 @@ int main(void)
             CHECK(scene_load_hair(&s, path) == 0, "load %s", path);
             scene_camera_rays(&s, (int)side, (int)side, org, dir);
             test_each_crossing_once("straight.hair", &s, org, dir, rays);
+            test_tube_crossings(&s);
             scene_free(&s);
         }
     }

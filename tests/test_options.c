@@ -461,9 +461,22 @@ static void test_invalid_options(const hair_scene *s)
         static const float *const no_steps[2] = {NULL, NULL};
         const char *expect[] = {"basis", "tangents", "tangents", "simd", "threads", "max_leaf_size", "hair_space_candidates",
                                 "curve_pieces", "shape", "precision", "end_caps", "back_faces", "time_steps", "time_steps",
-                                "time_vertices", "time_vertices", "spatial_split_budget"};
+                                "time_vertices", "time_vertices", "spatial_split_budget", "verify_hair"};
         int which;
         hairobb_build_options defaults = hairobb_default_options(), zero;
+        hairobb_bvh *source = NULL;
+        unsigned char *saved = NULL;
+        size_t saved_size = 0;
+        if (hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, NULL, &source) == HAIROBB_OK) {
+            saved_size = hairobb_save_size(source);
+            saved = (unsigned char *)malloc(saved_size);
+            if (saved && hairobb_save(source, saved, saved_size) != HAIROBB_OK) {
+                free(saved);
+                saved = NULL;
+            }
+            hairobb_free(source);
+        }
+        CHECK(saved != NULL, "a BVH saved for the loads below");
         memset(&zero, 0, sizeof zero);
         CHECK(!memcmp(&defaults, &zero, sizeof zero), "hairobb_default_options is the zeroed struct");
         CHECK(hairobb_check_options(&defaults) == NULL && hairobb_check_options(NULL) == NULL, "the defaults are in range");
@@ -488,7 +501,8 @@ static void test_invalid_options(const hair_scene *s)
             case 13: opt.time_steps = 2; opt.basis = HAIROBB_BASIS_HERMITE; opt.tangents = tangents; opt.time_vertices = no_steps; break;
             case 14: opt.time_steps = 2; break;
             case 15: opt.time_steps = 2; opt.time_vertices = no_steps; break;
-            default: opt.spatial_split_budget = NAN; break;
+            case 16: opt.spatial_split_budget = NAN; break;
+            default: opt.verify_hair = (hairobb_switch)3; break;   /* read by a load only, refused by both */
             }
             named = hairobb_check_options(&opt);
             bvh = (hairobb_bvh *)&opt;
@@ -497,7 +511,21 @@ static void test_invalid_options(const hair_scene *s)
                   "refusal %d: check_options names %s (want %s), the build returns %s", which, named ? named : "nothing", expect[which],
                   hairobb_result_string(r));
             if (r == HAIROBB_OK) hairobb_free(bvh);
+            /* a load reads some of the options: it refuses those it reads
+               out of range (INVALID_ARGUMENT, with check_options naming
+               one) and takes the saved BVH's for the rest */
+            if (saved) {
+                hairobb_build_options load_options = opt;
+                bvh = NULL;
+                r = hairobb_load(saved, saved_size, s->vertices, s->vertex_count, s->indices, s->segment_count, &load_options, &bvh);
+                CHECK(r == HAIROBB_OK || (r == HAIROBB_ERROR_INVALID_ARGUMENT && hairobb_check_options(&load_options) != NULL),
+                      "refusal %d (%s): the load returns %s", which, expect[which], hairobb_result_string(r));
+                CHECK((r == HAIROBB_ERROR_INVALID_ARGUMENT) == (which <= 4 || (which >= 12 && which <= 15) || which == 17),
+                      "refusal %d (%s): the load refuses exactly the options it reads (%s)", which, expect[which], hairobb_result_string(r));
+                hairobb_free(bvh);
+            }
         }
+        free(saved);
     }
     CHECK(counted.live == live_before, "%ld allocations leaked by the invalid-option tests", counted.live - live_before);
 }
