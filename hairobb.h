@@ -1,4 +1,4 @@
-/* hairobb.h - v0.1.0 - ray tracing of hair and fur with a mixed AABB/OBB BVH
+/* hairobb.h - v0.2.0 - ray tracing of hair and fur with a mixed AABB/OBB BVH
    single-file C library, public domain or MIT (see the end of the file)
 
    Builds a 4-wide (or 8-wide) bounding volume hierarchy over cubic hair
@@ -157,8 +157,9 @@
      the 4 consecutive control points of segment i. Position and radius are
      cubic Bezier curves in u. No alignment is required. Other curve bases
      (B-spline, Catmull-Rom, Hermite, linear) are options.basis
-     (BUILD OPTIONS). Coordinates must be finite and at most 1e18 in
-     magnitude, radii at least 0 (ERRORS).
+     (BUILD OPTIONS). Coordinates, radii (and Hermite tangents) must be
+     finite and at most 1e18 in magnitude, radii at least 0: anything
+     else is INVALID_GEOMETRY (ERRORS).
 
      MEMORY LIFETIME: by default (bezier_copy, BUILD OPTIONS) a static BVH
      traces its own copy of every segment's Bezier points and never reads
@@ -206,14 +207,20 @@
      options.end_caps = HAIROBB_ON closes each free end with a flat cap,
      the disk of radius r normal to P' there, whose hits report u exactly 0
      or 1 and Ng = -P'(0) or P'(1), unit. An end is free where it is no
-     smooth joint with the neighbouring segment in index order (the same
-     point, tangents parallel within 1e-3): a strand's tips, and both sides
-     of a kink. Both sheets count:
+     smooth joint with the neighbouring segment in index order (segment
+     i - 1 or i + 1 of the indices array: the same point, tangents
+     parallel within 1e-3): a strand's tips, and both sides of a kink.
+     Joints follow the index order, not the vertex order: a strand whose
+     segments are listed out of order (indices {8, 0, 4} for Bezier
+     segments at vertices 0, 4, 8 in a row) gets caps inside it where
+     neighbours in the list do not meet; list each strand's segments in
+     order along it. Both sheets count:
      a ray meets the entry at t = (z(u) - S)/|dir| and the exit at (z(u) +
      S)/|dir|, S = sqrt(r^2 - |P2|^2), where the circle's plane meets the
      ray on the circle. The intersector finds the intervals of u where the
      ray passes within r of the centre line, then each sheet's roots in
-     them by sign changes and bisection; a ray within about 1e-3 r of a
+     them from sign changes at samples, refined by Newton steps kept in
+     the bracket (halving where a step leaves it); a ray within about 1e-3 r of a
      tube's silhouette is decided by the float rounding of the points in
      ray space. options.back_faces = HAIROBB_OFF keeps only hits whose
      normal faces the ray (entries; a ray inside a fibre does not see it).
@@ -226,7 +233,11 @@
      hairobb_hit: t, u, v as above; Ng the ribbon's unit normal facing the ray
      origin (round curves: the tube's outward unit normal, with the
      curvature term, n ~ R - r r' P' / (|P'|^2 - R.P''), R = X - P(u));
-     tangent = P'(u) in world space; prim_id the segment index.
+     tangent = P'(u) in world space; prim_id the segment index. On tubes
+     v is the same formula at the tube's hit point, the signed offset
+     across the fibre in [-1, 1] that hair BSDFs take (h in the
+     Marschner and d'Eon models; its sign follows cross(P', X - P) along
+     dir), equal at a circle's entry and exit.
      (Embree's flat curves report v in [-1, 1] too, and the tangent as Ng.)
      Every hit with t in [tnear, tfar] counts, including the ribbon a
      secondary ray starts on. Trace secondary rays with
@@ -361,7 +372,15 @@
                              the build has and the CPU runs (SIMD PATHS);
                              a path named forces it (comparisons, tests),
                              HAIROBB_ERROR_UNSUPPORTED where the build
-                             lacks it or the CPU cannot run it.
+                             lacks it or the CPU cannot run it. A build
+                             has one baseline path (its compiler target's:
+                             SSE2 in a default x86-64 build, NEON on
+                             AArch64, NONE with HAIROBB_NO_SIMD) and, on
+                             x86 with dispatch, AVX2: a default x86-64
+                             build takes AUTO, SSE2 and AVX2; NONE, SSE41
+                             and AVX only where they are its baseline
+                             (HAIROBB_NO_SIMD, -msse4.1, -mavx). Plain C
+                             answers as every path, bit for bit.
                              hairobb_get_simd(bvh) tells a BVH's path.
      verify_hair             hairobb_load only (SAVE AND LOAD): HAIROBB_AUTO
                              (default) and _ON compare the hair with the
@@ -529,11 +548,12 @@
          hairobb_load(bytes, size, vertices, vertex_count, indices, segment_count, &options, &loaded);
      A load takes the hair arrays the build took (and keeps pointers to
      them, as a built BVH does) and traces bit for bit as the saved BVH did,
-     on the path options.simd picks. Of the options it reads basis and
-     tangents (they must describe the saved hair), simd, hit_filter(_user),
-     allocator_user, verify_hair, and threads and parallel_for(_user) for
-     a later hairobb_refit (a loaded BVH refits as the saved one would);
-     every other setting (layout, policy, precision, curve pieces, leaf
+     on the path options.simd picks. Of the options it reads basis,
+     tangents, time_steps and time_vertices (they must describe the saved
+     hair), simd, hit_filter(_user), occluded_filter(_user),
+     allocator_user, verify_hair, bezier_copy, and threads and
+     parallel_for(_user) for a later hairobb_refit (a loaded BVH refits as
+     the saved one would); every other setting (layout, policy, precision, curve pieces, leaf
      size) is the saved BVH's, and bezier_copy is the load's own. The
      copy is not saved: the load writes it again from the caller's arrays
      (other bases converted with the build's code). A load is many times
@@ -691,7 +711,7 @@ typedef enum hairobb_result {
     HAIROBB_OK = 0,
     HAIROBB_ERROR_INVALID_ARGUMENT,   /* NULL pointer, zero segments, bad option value */
     HAIROBB_ERROR_INDEX_OUT_OF_RANGE, /* indices[i] + 3 >= vertex_count (+ 1 for Hermite and linear) */
-    HAIROBB_ERROR_INVALID_GEOMETRY,   /* NaN/Inf or |coordinate| > 1e18, negative radius */
+    HAIROBB_ERROR_INVALID_GEOMETRY,   /* NaN/Inf, |coordinate| or radius > 1e18, negative radius */
     HAIROBB_ERROR_OUT_OF_MEMORY,      /* HAIROBB_MALLOC returned NULL */
     HAIROBB_ERROR_TOO_LARGE,          /* counts whose byte sizes overflow, > 2^32-1 segments */
     HAIROBB_ERROR_CANCELLED,          /* the progress callback asked to stop */
@@ -837,8 +857,8 @@ HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh);
    keeps its topology and frames; every box is recomputed, and the copy
    (bezier_copy) written again. The BVH keeps the new pointer, which it
    reads as MEMORY LIFETIME says. NULL: INVALID_ARGUMENT;
-   NaN/Inf, |coordinate| > 1e18 or a negative radius: INVALID_GEOMETRY,
-   and the BVH is left as it was. Hermite BVHs need new tangents too:
+   NaN/Inf, |coordinate| or radius > 1e18 or a negative radius:
+   INVALID_GEOMETRY, and the BVH is left as it was. Hermite BVHs need new tangents too:
    hairobb_refit_tangents (tangents NULL for every other basis). Not while
    another thread traces the BVH. */
 HAIROBB_DEF hairobb_result hairobb_refit(hairobb_bvh *bvh, const float *vertices);
@@ -883,9 +903,10 @@ HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, si
 /* A BVH from the size bytes hairobb_save wrote (nothing of buffer is kept),
    over the same hair it was built on: the caller's arrays as hairobb_build
    takes them (the BVH keeps pointers to them, see MEMORY LIFETIME) and
-   options (may be NULL) for basis, tangents, simd, hit_filter,
-   allocator_user, verify_hair and bezier_copy; every other option is the
-   saved BVH's (a BVH saved with or without the copy loads either way).
+   options (may be NULL) for basis, tangents, time_steps, time_vertices,
+   simd, hit_filter, occluded_filter (and their user pointers),
+   allocator_user, verify_hair, bezier_copy, threads and parallel_for;
+   every other option is the saved BVH's (a BVH saved with or without the copy loads either way).
    It traces as the saved BVH did, bit for bit. On failure *out is NULL and
    nothing is leaked: HAIROBB_ERROR_INVALID_FILE (anything wrong in the
    bytes), _UNSUPPORTED (saved by another format version, node width or
@@ -918,10 +939,10 @@ typedef struct hairobb_hit {
     float Ng[3];        /* unit geometric normal: the ribbon's, facing the ray origin; a tube's, outward */
     float tangent[3];   /* dP/du at u in world space, not normalised */
     uint32_t prim_id;   /* segment index, HAIROBB_INVALID_ID on a miss */
-    uint32_t instance_id;   /* scenes (SCENES): the instance hit; HAIROBB_INVALID_ID from a BVH's own calls */
+    uint32_t instance_id;   /* scenes (SCENES): the instance hit; HAIROBB_INVALID_ID from a BVH's own calls and on a miss */
 } hairobb_hit;
 
-/* 1: nearest hit in [tnear, tfar] written to *hit; 0: miss, hit->prim_id = HAIROBB_INVALID_ID. */
+/* 1: nearest hit in [tnear, tfar] written to *hit; 0: miss, hit->prim_id and instance_id = HAIROBB_INVALID_ID. */
 HAIROBB_DEF int hairobb_intersect1(const hairobb_bvh *bvh, const hairobb_ray *ray, hairobb_hit *hit);
 /* 1: some segment is hit in [tnear, tfar]; stops at the first one found. */
 HAIROBB_DEF int hairobb_occluded1(const hairobb_bvh *bvh, const hairobb_ray *ray);
@@ -8309,7 +8330,7 @@ HAIROBB_DEF int hairobb_intersect1_context(const hairobb_bvh *bvh, const hairobb
     /* `from` is read (into rs) before *hit is written: the two may be one
        hit, as a path tracer's loop passes them */
     ready = bvh && ray && hairobb__ray_setup_from(&rs, bvh, from, ray);
-    hit->prim_id = HAIROBB_INVALID_ID;
+    hit->prim_id = hit->instance_id = HAIROBB_INVALID_ID;
     if (!ready) return 0;
     hairobb__set_filters(&rs, bvh, context, 0);
     if (!hairobb__trace(bvh, &rs, 0)) return 0;

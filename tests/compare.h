@@ -38,7 +38,7 @@ static inline double percentile(const double *sorted, size_t n, double p)
 
 /* The same answer: both miss, or both hit with the same bits in every
    field (t, u, v, Ng, tangent, prim_id, instance_id: 4-byte fields, no
-   padding). A miss writes prim_id alone, so the rest of a missed hit is not
+   padding). A miss writes the two ids alone, so the rest of a missed hit is not
    compared. */
 static inline int same_hit(int got_a, const hairobb_hit *a, int got_b, const hairobb_hit *b)
 {

@@ -748,7 +748,9 @@ static void test_hit_attributes(void)
         if (ref_intersect_segment(vertices, indices, 0, ray.org, ray.dir, 0.0, INFINITY, &ref)) {
             CHECK(hairobb_intersect1(bvh, &ray, &hit), "hit expected");
             ray.tfar = (float)ref.t * 0.999f;
-            CHECK(!hairobb_intersect1(bvh, &ray, &hit) && hit.prim_id == HAIROBB_INVALID_ID, "tfar before the hit");
+            hit.instance_id = 7u;   /* a miss writes both ids, whatever the hit held */
+            CHECK(!hairobb_intersect1(bvh, &ray, &hit) && hit.prim_id == HAIROBB_INVALID_ID && hit.instance_id == HAIROBB_INVALID_ID,
+                  "tfar before the hit: a miss, both ids HAIROBB_INVALID_ID");
             CHECK(!hairobb_occluded1(bvh, &ray), "occluded with tfar before the hit");
             ray.tfar = INFINITY;
             ray.tnear = (float)ref.t * 1.001f;
