@@ -1601,7 +1601,8 @@ static void test_stress_degenerate(void)
             reference = ref_build(bezier, 4 * segments, bezier_indices, segments);
             /* mode bit 0: end caps; bit 1: back faces culled */
             for (mode = 0; mode < 4; ++mode) {
-                hairobb_bvh *bvh[2] = {NULL, NULL}, *refitted = NULL, *loaded = NULL;
+                hairobb_bvh *bvh[2] = {NULL, NULL}, *refitted = NULL, *loaded = NULL, *moving = NULL;
+                const float *steps[2] = {regular, points};
                 hairobb_build_options o = hairobb_default_options();
                 unsigned char *saved = NULL;
                 size_t saved_size = 0;
@@ -1625,6 +1626,12 @@ static void test_stress_degenerate(void)
                     saved = (unsigned char *)malloc(saved_size);
                     ok &= saved && hairobb_save(bvh[0], saved, saved_size) == HAIROBB_OK &&
                           hairobb_load(saved, saved_size, points, DEGENERATE_POINTS, indices, segments, &o, &loaded) == HAIROBB_OK;
+                }
+                if (ok && bases[b] != HAIROBB_BASIS_HERMITE) {   /* moving into the shape (no moving Hermite tangents) */
+                    hairobb_build_options m = o;
+                    m.time_steps = 2;
+                    m.time_vertices = steps;
+                    ok &= hairobb_build(NULL, DEGENERATE_POINTS, indices, segments, &m, &moving) == HAIROBB_OK;
                 }
                 CHECK(ok && reference, "degenerate %s, basis %d, mode %d: builds, refits, saves and loads", degenerate_shapes[shape].name,
                       b, mode);
@@ -1652,6 +1659,33 @@ static void test_stress_degenerate(void)
                     differ += !same_hit(got[0], &hit[0], got[1], &hit[1]) + !same_hit(got[0], &hit[0], got[2], &hit[2]) +
                               !same_hit(got[0], &hit[0], got[3], &hit[3]);
                     occluded_differ += occluded != got[0];
+                    if (moving) {   /* on the way into the shape, and in it */
+                        ray.time = i & 1 ? 1.0f : 0.5f;
+                        got[2] = hairobb_intersect1(moving, &ray, &hit[2]);
+                        bad += got[2] && !degenerate_hit_ok(&hit[2], &ray, segments);
+                        occluded_differ += hairobb_occluded1(moving, &ray) != got[2];
+                        ray.time = 0.0f;
+                    }
+                    if (got[0]) {   /* a path of 8 bounces from the hit, reflected about Ng */
+                        hairobb_hit from = hit[0], next;
+                        hairobb_ray bounce = ray;
+                        int depth;
+                        for (depth = 0; depth < 8; ++depth) {
+                            float along = 2.0f * (bounce.dir[0] * from.Ng[0] + bounce.dir[1] * from.Ng[1] + bounce.dir[2] * from.Ng[2]);
+                            int hit_again;
+                            for (k = 0; k < 3; ++k) {
+                                bounce.org[k] = bounce.org[k] + from.t * bounce.dir[k];
+                                bounce.dir[k] -= along * from.Ng[k];
+                            }
+                            bounce.tnear = 0.0f;
+                            bounce.tfar = INFINITY;
+                            hit_again = hairobb_intersect1_from(bvh[0], &from, &bounce, &next);
+                            bad += hit_again && !degenerate_hit_ok(&next, &bounce, segments);
+                            occluded_differ += hairobb_occluded1_from(bvh[0], &from, &bounce) != hit_again;
+                            if (!hit_again) break;
+                            from = next;
+                        }
+                    }
                     /* the reference on the Bezier form, converted in double
                        where the basis is another: hairobb's float conversion
                        rounds the points by a few ulps of the coordinates,
@@ -1660,6 +1694,7 @@ static void test_stress_degenerate(void)
                         stress_ray(bvh[0], reference, ray.org, ray.dir, 0.0f, &n);
                 }
                 free(saved);
+                hairobb_free(moving);
                 hairobb_free(loaded);
                 hairobb_free(refitted);
                 for (p = 0; p < 2; ++p) hairobb_free(bvh[p]);
@@ -1667,7 +1702,8 @@ static void test_stress_degenerate(void)
             ref_free(reference);
         }
     }
-    printf("stress degenerate tubes: %zu shapes x 5 bases x caps and culling on/off, %zu BVHs, %zu rays: %zu malformed hits, "
+    printf("stress degenerate tubes: %zu shapes x 5 bases x caps and culling on/off, %zu BVHs, %zu rays (and 8 bounces from each "
+           "hit, and moving into the shape): %zu malformed hits, "
            "%zu differ between AVX2/SSE2, refit and load, %zu occluded1 against intersect1; reference (open ends, "
            "both sheets): %zu rays, %zu hits, %zu disagree, %zu at a silhouette, %zu off in t\n",
            DEGENERATE_SHAPES, built, rays, bad, differ, occluded_differ, n.rays, n.hits, n.disagree, n.edge, n.t_bad);
