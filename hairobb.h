@@ -80,6 +80,11 @@
        hairobb_intersect1_context  intersect1(_from) with a per-call hit filter and its data (HITS)
        hairobb_occluded1_context   occluded1(_from) with a per-call hit filter and its data (HITS)
      Several hair groups (SCENES)
+       hairobb_build_groups     one BVH over several groups' arrays (masks, user pointers; hit.group_id)
+       hairobb_refit_group      new positions of one group of such a BVH
+       hairobb_group_count      its group count (1 for hairobb_build's BVHs)
+       hairobb_group_user       a group's user pointer
+       hairobb_group_segments   a group's segment count
        hairobb_scene_build      a top level over instances of BVHs (maps, masks, user pointers)
        hairobb_scene_update     new maps, masks, users or BVHs for the same instances
        hairobb_scene_free       frees a scene (not its BVHs; NULL is ignored)
@@ -487,8 +492,31 @@
 
   11. SCENES (several hair groups, instances)
   ---------------------------------------------
-     A groom is several hair systems (scalp, brows, lashes, fur patches),
-     often placed more than once. hairobb_scene_build(instances, count,
+     GROUPS IN ONE BVH: a groom's descriptions (base, flyaways, clumps,
+     brows) share space, each with its own arrays, shader and mask.
+     hairobb_build_groups(groups, group_count, options, &bvh) builds one
+     tree over every group's segments, leaves mixing groups freely, so a
+     ray walks one tree however many groups overlap (a scene of one BVH a
+     group walks each BVH whose box it crosses: several times slower where
+     groups share space). Each hairobb_group holds its arrays as
+     hairobb_build takes them (options.basis for all; tangents and motion
+     steps per group), a mask and a user pointer. Hits name the group
+     (hit.group_id) and the segment in it (hit.prim_id); hairobb_build's
+     BVHs are one group, 0. The ray's mask (context->mask, on BVH calls
+     and scene calls) is tested against each group's: a group is traced
+     where they share a bit, 0 in either meaning every bit. A mask that
+     excludes no group costs a ray nothing per segment. Filters see
+     group_id; a secondary ray skips the segment it leaves in its own
+     group only, and strands never join across groups (joints, caps).
+     The BVH keeps its own copy of the groups' arrays (the caller's may go
+     after the build; hairobb_memory_bytes counts the copy: 16 bytes a
+     point and 4 a segment more than one BVH). hairobb_refit_group moves
+     one group (its new points copied in, the tree refitted);
+     hairobb_refit and hairobb_refit_motion refuse a multi-group BVH, and
+     hairobb_save does not take one yet (UNSUPPORTED). A multi-group BVH
+     traces as one BVH over the groups' arrays concatenated in group order
+     does, hit for hit (tests/test_groups.c).
+     INSTANCES: a groom is often placed more than once. hairobb_scene_build(instances, count,
      allocator_user, &scene) puts BVHs under one top level: each
      hairobb_instance names a BVH (several may share one; the scene does
      not own them), an affine object-to-world map (3 rows of 4 floats:
@@ -665,6 +693,7 @@
        >>passes          the passes over every segment, and the build's steps
        >>build_api       hairobb_build, hairobb_free, memory and stats
        >>refit           refit and the SAH cost
+       >>groups          several hair groups in one BVH: hairobb_build_groups
        >>save_load       the saved format and the loader's checks
        >>rays            what every traversal path reads of a ray
        >>kernels         compiled once, and again for AVX2 where dispatched:
@@ -852,6 +881,41 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
                                          const hairobb_build_options *options, hairobb_bvh **out);
 HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh);
 
+/* Several hair groups in one BVH (GROUPS): a groom's descriptions (base,
+   flyaways, brows...) as one tree, hits naming the group (hit.group_id)
+   and the segment in it (hit.prim_id). Each group's arrays are as
+   hairobb_build takes them, in options.basis. */
+typedef struct hairobb_group {
+    const float *vertices;      /* vertex_count x (x, y, z, radius); NULL for moving hair (time_vertices) */
+    size_t vertex_count;
+    const uint32_t *indices;    /* segment_count first control points, into this group's vertices */
+    size_t segment_count;
+    const float *tangents;      /* HAIROBB_BASIS_HERMITE: 4 floats per vertex; else NULL */
+    const float *const *time_vertices;  /* motion blur: options.time_steps arrays of vertex_count points; else NULL */
+    uint32_t mask;              /* traced by rays whose mask (hairobb_context.mask) shares a bit; 0 = every bit */
+    void *user;                 /* given back by hairobb_group_user */
+} hairobb_group;
+/* One BVH over every segment of group_count groups (options for all of
+   them; options.tangents and options.time_vertices are ignored: each
+   group's are its own). The BVH keeps its own copy of the groups' arrays:
+   the caller's may go after the build. A group with no segments is
+   allowed (it is never hit); group_count 0 or no segments at all is
+   INVALID_ARGUMENT, a group's bad index INDEX_OUT_OF_RANGE, bad points
+   INVALID_GEOMETRY. */
+HAIROBB_DEF hairobb_result hairobb_build_groups(const hairobb_group *groups, size_t group_count,
+                                                const hairobb_build_options *options, hairobb_bvh **out);
+/* New positions (and tangents, Hermite) of one group: vertex_count points
+   as built, copied in; the tree is refitted (REFIT). Moving BVHs: time_vertices
+   of the group's steps (vertices NULL). Errors as hairobb_refit's; the BVH
+   is left as it was. */
+HAIROBB_DEF hairobb_result hairobb_refit_group(hairobb_bvh *bvh, uint32_t group_id, const float *vertices, const float *tangents,
+                                               const float *const *time_vertices);
+/* The group count (1 for hairobb_build's BVHs), a group's user pointer
+   and its segment count (0 for a group id out of range). */
+HAIROBB_DEF uint32_t hairobb_group_count(const hairobb_bvh *bvh);
+HAIROBB_DEF void *hairobb_group_user(const hairobb_bvh *bvh, uint32_t group_id);
+HAIROBB_DEF size_t hairobb_group_segments(const hairobb_bvh *bvh, uint32_t group_id);
+
 /* Refit (see REFIT): the same segments at new positions (and radii),
    vertices as the build's (the same vertex_count and indices). The tree
    keeps its topology and frames; every box is recomputed, and the copy
@@ -895,9 +959,11 @@ HAIROBB_DEF const char *hairobb_simd_string(hairobb_simd simd);
 HAIROBB_DEF void hairobb_bounds(const hairobb_bvh *bvh, float lower[3], float upper[3]);
 
 /* Saving and loading a built BVH (SAVE AND LOAD in the manual).
-   hairobb_save_size: the bytes hairobb_save writes (0 for NULL).
-   hairobb_save: writes them into buffer; HAIROBB_ERROR_INVALID_ARGUMENT
-   (nothing written) if size is smaller or a pointer NULL. */
+   hairobb_save_size: the bytes hairobb_save writes (0 for NULL, and for a
+   multi-group BVH). hairobb_save: writes them into buffer;
+   HAIROBB_ERROR_INVALID_ARGUMENT (nothing written) if size is smaller or a
+   pointer NULL; HAIROBB_ERROR_UNSUPPORTED for a multi-group BVH
+   (hairobb_build_groups), which the format does not hold yet. */
 HAIROBB_DEF size_t hairobb_save_size(const hairobb_bvh *bvh);
 HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, size_t size);
 /* A BVH from the size bytes hairobb_save wrote (nothing of buffer is kept),
@@ -940,6 +1006,7 @@ typedef struct hairobb_hit {
     float tangent[3];   /* dP/du at u in world space, not normalised */
     uint32_t prim_id;   /* segment index, HAIROBB_INVALID_ID on a miss */
     uint32_t instance_id;   /* scenes (SCENES): the instance hit; HAIROBB_INVALID_ID from a BVH's own calls and on a miss */
+    uint32_t group_id;      /* the group of prim_id (GROUPS); 0 in hairobb_build's BVHs; HAIROBB_INVALID_ID on a miss */
 } hairobb_hit;
 
 /* 1: nearest hit in [tnear, tfar] written to *hit; 0: miss, hit->prim_id and instance_id = HAIROBB_INVALID_ID. */
@@ -965,7 +1032,7 @@ HAIROBB_DEF int hairobb_occluded1_from(const hairobb_bvh *bvh, const hairobb_hit
 typedef struct hairobb_context {
     hairobb_filter_fn filter;   /* NULL: none for this call */
     void *user;
-    uint32_t mask;              /* scenes: the ray's mask (SCENES); 0 = every bit. BVH calls ignore it */
+    uint32_t mask;              /* the ray's mask against instances' (SCENES) and groups' (GROUPS); 0 = every bit */
 } hairobb_context;
 
 /* intersect1 / occluded1 with a per-call filter; context and from may be
@@ -1548,6 +1615,19 @@ struct hairobb_bvh {
     const float **time_vertices;
     int points_in_place;              /* static Bezier input: the caller's points as they are */
     int copy_points;                  /* bezier_copy resolved: ON for static hair, else 0 */
+    /* several groups (hairobb_build_groups, >>groups): the BVH is built
+       over its own concatenation of the groups' arrays (group_vertices,
+       group_indices, ...), group g holding segments [group_first[g],
+       group_first[g + 1]) and vertices [vertex_first[g], vertex_first[g
+       + 1]); group_first NULL for hairobb_build's one group */
+    uint32_t group_count;
+    uint32_t *group_first, *group_mask;
+    size_t *vertex_first;
+    void **group_user;
+    uint32_t group_mask_and;          /* the groups' masks ANDed: a ray mask sharing a bit with it excludes none */
+    float *group_vertices, *group_tangents, *group_steps;   /* the concatenation: points, tangents, every step's points */
+    uint32_t *group_indices;
+    const float **group_step_list;    /* time_steps pointers into group_steps */
 };
 
 
@@ -5032,6 +5112,31 @@ failed:
     return result;
 }
 
+/* A multi-group BVH's arrays (>>groups): freed and counted with the BVH. */
+static void hairobb__free_groups(hairobb_bvh *bvh)
+{
+    void *user = bvh->allocator_user;
+    if (bvh->group_first) HAIROBB_FREE(bvh->group_first, user);
+    if (bvh->group_mask) HAIROBB_FREE(bvh->group_mask, user);
+    if (bvh->vertex_first) HAIROBB_FREE(bvh->vertex_first, user);
+    if (bvh->group_user) HAIROBB_FREE(HAIROBB__CAST(void *, bvh->group_user), user);
+    if (bvh->group_vertices) HAIROBB_FREE(bvh->group_vertices, user);
+    if (bvh->group_tangents) HAIROBB_FREE(bvh->group_tangents, user);
+    if (bvh->group_steps) HAIROBB_FREE(bvh->group_steps, user);
+    if (bvh->group_indices) HAIROBB_FREE(bvh->group_indices, user);
+    if (bvh->group_step_list) HAIROBB_FREE(HAIROBB__CAST(void *, bvh->group_step_list), user);
+}
+
+/* The bytes a multi-group BVH holds for its groups (hairobb_memory_bytes). */
+static size_t hairobb__group_bytes(const hairobb_bvh *bvh)
+{
+    size_t points = 4 * sizeof(float) * bvh->vertex_count;
+    if (!bvh->group_first) return 0;
+    return (size_t)bvh->group_count * (2 * sizeof(uint32_t) + sizeof(size_t) + sizeof(void *)) + sizeof(uint32_t) + sizeof(size_t) +
+           (bvh->group_vertices ? points : 0) + (bvh->group_tangents ? points : 0) + bvh->time_steps * (points + sizeof(float *)) +
+           sizeof(uint32_t) * bvh->segment_count;
+}
+
 HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh)
 {
     void *user;
@@ -5044,6 +5149,7 @@ HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh)
     if (bvh->node_allocation) HAIROBB_FREE(bvh->node_allocation, user);
     if (bvh->leaf_prims) HAIROBB_FREE(bvh->leaf_prims, user);
     if (bvh->leaf_ranges) HAIROBB_FREE(bvh->leaf_ranges, user);
+    hairobb__free_groups(bvh);
     HAIROBB_FREE(bvh, user);
 }
 
@@ -5053,7 +5159,8 @@ HAIROBB_DEF size_t hairobb_memory_bytes(const hairobb_bvh *bvh)
     return sizeof *bvh + (bvh->node_allocation ? bvh->node_bytes + 64 : 0) + hairobb__leaf_bytes(bvh) +
            (bvh->points_allocation ? hairobb__copy_bytes(bvh->leaf_prim_count, bvh->segment_count) : 0) +
            (bvh->leaf_offsets ? sizeof(uint32_t) * bvh->leaf_prim_count : 0) +
-           (bvh->owned_indices ? sizeof(uint32_t) * bvh->segment_count : 0) + bvh->time_steps * sizeof *bvh->time_vertices;
+           (bvh->owned_indices ? sizeof(uint32_t) * bvh->segment_count : 0) + bvh->time_steps * sizeof *bvh->time_vertices +
+           hairobb__group_bytes(bvh);
 }
 
 HAIROBB_DEF void hairobb_get_stats(const hairobb_bvh *bvh, hairobb_stats *stats)
@@ -5378,7 +5485,8 @@ static void hairobb__refit_tree(hairobb_bvh *bvh)
     memcpy(bvh->upper, upper, sizeof bvh->upper);
 }
 
-HAIROBB_DEF hairobb_result hairobb_refit_tangents(hairobb_bvh *bvh, const float *vertices, const float *tangents)
+/* hairobb_refit_tangents for every BVH (a multi-group one's concatenation too) */
+static hairobb_result hairobb__refit_arrays(hairobb_bvh *bvh, const float *vertices, const float *tangents)
 {
     const uint32_t *indices;
     hairobb_result result;
@@ -5396,12 +5504,20 @@ HAIROBB_DEF hairobb_result hairobb_refit_tangents(hairobb_bvh *bvh, const float 
     return HAIROBB_OK;
 }
 
+/* A multi-group BVH refits one group at a time (hairobb_refit_group): its
+   arrays are the BVH's own. */
+HAIROBB_DEF hairobb_result hairobb_refit_tangents(hairobb_bvh *bvh, const float *vertices, const float *tangents)
+{
+    if (bvh && bvh->group_first) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    return hairobb__refit_arrays(bvh, vertices, tangents);
+}
+
 HAIROBB_DEF hairobb_result hairobb_refit(hairobb_bvh *bvh, const float *vertices)
 {
     return hairobb_refit_tangents(bvh, vertices, NULL);
 }
 
-HAIROBB_DEF hairobb_result hairobb_refit_motion(hairobb_bvh *bvh, const float *const *time_vertices)
+static hairobb_result hairobb__refit_steps(hairobb_bvh *bvh, const float *const *time_vertices)
 {
     hairobb_build_options opt;
     hairobb_result result;
@@ -5419,6 +5535,196 @@ HAIROBB_DEF hairobb_result hairobb_refit_motion(hairobb_bvh *bvh, const float *c
     bvh->vertices = vertices;
     hairobb__refit_tree(bvh);
     return HAIROBB_OK;
+}
+
+HAIROBB_DEF hairobb_result hairobb_refit_motion(hairobb_bvh *bvh, const float *const *time_vertices)
+{
+    if (bvh && bvh->group_first) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    return hairobb__refit_steps(bvh, time_vertices);
+}
+
+/* ------------------------------------------------------------------------ */
+/* >>groups  Several hair groups in one BVH                                 */
+/* ------------------------------------------------------------------------ */
+/* A multi-group BVH is hairobb_build's BVH over one concatenation of the
+   groups' arrays, which it owns: the tree, the traversal and the
+   intersector are the one BVH's, so it traces as fast as one BVH over the
+   same hair and hits the same segments. What groups add is a segment's
+   group (hairobb__group_of: a binary search of group_first, where a hit's
+   ids are written and where a ray mask excludes groups), the groups'
+   masks at the leaves, and strands that never join across groups. */
+
+/* The points of one group's time step k (k = -1: static) within the concatenation. */
+static float *hairobb__group_points(const hairobb_bvh *bvh, uint32_t group, int step)
+{
+    float *base = step < 0 ? bvh->group_vertices : bvh->group_steps + 4 * bvh->vertex_count * (size_t)step;
+    return base + 4 * bvh->vertex_first[group];
+}
+
+/* Checks the groups and counts their vertices and segments (TOO_LARGE
+   past 2^32 - 1 of either, as indices are 32 bits). */
+static hairobb_result hairobb__check_groups(const hairobb_group *groups, size_t group_count, const hairobb_build_options *opt,
+                                            size_t *vertex_total, size_t *segment_total)
+{
+    size_t g, i, points = hairobb__basis_points(opt->basis);
+    unsigned k, steps = opt->time_steps >= 2 ? opt->time_steps : 0u;
+    *vertex_total = *segment_total = 0;
+    if (!groups || group_count == 0 || group_count > 0xfffffffeu) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    for (g = 0; g < group_count; ++g) {
+        const hairobb_group *group = &groups[g];
+        if (group->segment_count == 0) continue;
+        if (!group->indices || (steps ? !group->time_vertices : !group->vertices) ||
+            (opt->basis == HAIROBB_BASIS_HERMITE) != (group->tangents != NULL))
+            return HAIROBB_ERROR_INVALID_ARGUMENT;
+        for (k = 0; k < steps; ++k)
+            if (!group->time_vertices[k]) return HAIROBB_ERROR_INVALID_ARGUMENT;
+        if (group->vertex_count > 0xffffffffu - *vertex_total || group->segment_count > 0xffffffffu - *segment_total)
+            return HAIROBB_ERROR_TOO_LARGE;
+        /* each index within its own group's points (in the concatenation it
+           would reach the next group's) */
+        for (i = 0; i < group->segment_count; ++i)
+            if (group->vertex_count < points || group->indices[i] > group->vertex_count - points) return HAIROBB_ERROR_INDEX_OUT_OF_RANGE;
+        *vertex_total += group->vertex_count;
+        *segment_total += group->segment_count;
+    }
+    return *segment_total ? HAIROBB_OK : HAIROBB_ERROR_INVALID_ARGUMENT;
+}
+
+HAIROBB_DEF hairobb_result hairobb_build_groups(const hairobb_group *groups, size_t group_count,
+                                                const hairobb_build_options *options, hairobb_bvh **out)
+{
+    hairobb_build_options opt = options ? *options : hairobb_default_options();
+    hairobb_bvh scratch, *bvh = &scratch;   /* the groups' arrays, moved into the BVH once it is built */
+    hairobb_result result;
+    size_t vertex_total, segment_total, g, i, points_bytes;
+    unsigned k, steps = opt.time_steps >= 2 ? opt.time_steps : 0u;
+    void *user = opt.allocator_user;
+    if (out) *out = NULL;
+    /* the rest of the options as hairobb_build judges them, below */
+    if (!out || (unsigned)opt.basis > HAIROBB_BASIS_LINEAR || opt.time_steps > HAIROBB__MAX_TIME_STEPS) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    result = hairobb__check_groups(groups, group_count, &opt, &vertex_total, &segment_total);
+    if (result != HAIROBB_OK) return result;
+    if (vertex_total > (size_t)-1 / (4 * sizeof(float)) / (steps + 2)) return HAIROBB_ERROR_TOO_LARGE;
+    points_bytes = 4 * sizeof(float) * vertex_total;
+    memset(&scratch, 0, sizeof scratch);
+    scratch.allocator_user = user;
+    scratch.group_count = (uint32_t)group_count;
+    scratch.vertex_count = vertex_total;
+    scratch.time_steps = steps;
+    scratch.group_first = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC((group_count + 1) * sizeof(uint32_t), user));
+    scratch.group_mask = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(group_count * sizeof(uint32_t), user));
+    scratch.vertex_first = HAIROBB__CAST(size_t *, HAIROBB_MALLOC((group_count + 1) * sizeof(size_t), user));
+    scratch.group_user = HAIROBB__CAST(void **, HAIROBB_MALLOC(group_count * sizeof(void *), user));
+    scratch.group_indices = HAIROBB__CAST(uint32_t *, hairobb__malloc_large(segment_total * sizeof(uint32_t), user));
+    if (!steps) scratch.group_vertices = HAIROBB__CAST(float *, hairobb__malloc_large(points_bytes ? points_bytes : 16, user));
+    if (opt.basis == HAIROBB_BASIS_HERMITE)
+        scratch.group_tangents = HAIROBB__CAST(float *, hairobb__malloc_large(points_bytes ? points_bytes : 16, user));
+    if (steps) {
+        scratch.group_steps = HAIROBB__CAST(float *, hairobb__malloc_large(steps * points_bytes, user));
+        scratch.group_step_list = HAIROBB__CAST(const float **, HAIROBB_MALLOC(steps * sizeof(float *), user));
+    }
+    if (!scratch.group_first || !scratch.group_mask || !scratch.vertex_first || !scratch.group_user || !scratch.group_indices ||
+        (!steps && !scratch.group_vertices) || (opt.basis == HAIROBB_BASIS_HERMITE && !scratch.group_tangents) ||
+        (steps && (!scratch.group_steps || !scratch.group_step_list))) {
+        hairobb__free_groups(&scratch);
+        return HAIROBB_ERROR_OUT_OF_MEMORY;
+    }
+    scratch.group_first[0] = 0;
+    scratch.vertex_first[0] = 0;
+    scratch.group_mask_and = 0xffffffffu;
+    for (g = 0; g < group_count; ++g) {
+        const hairobb_group *group = &groups[g];
+        size_t n = group->segment_count ? group->vertex_count : 0, first = scratch.vertex_first[g];
+        uint32_t base = scratch.group_first[g];
+        scratch.vertex_first[g + 1] = first + n;
+        scratch.group_first[g + 1] = base + (uint32_t)group->segment_count;
+        scratch.group_mask[g] = group->mask ? group->mask : 0xffffffffu;
+        scratch.group_mask_and &= scratch.group_mask[g];
+        scratch.group_user[g] = group->user;
+        for (i = 0; i < group->segment_count; ++i) scratch.group_indices[base + i] = group->indices[i] + (uint32_t)first;
+        if (!n) continue;
+        if (!steps) memcpy(hairobb__group_points(&scratch, (uint32_t)g, -1), group->vertices, 4 * sizeof(float) * n);
+        if (scratch.group_tangents) memcpy(scratch.group_tangents + 4 * first, group->tangents, 4 * sizeof(float) * n);
+        for (k = 0; k < steps; ++k) memcpy(hairobb__group_points(&scratch, (uint32_t)g, (int)k), group->time_vertices[k], 4 * sizeof(float) * n);
+    }
+    for (k = 0; k < steps; ++k) scratch.group_step_list[k] = scratch.group_steps + 4 * vertex_total * (size_t)k;
+    opt.tangents = scratch.group_tangents;
+    opt.time_vertices = steps ? scratch.group_step_list : NULL;
+    result = hairobb_build(scratch.group_vertices, vertex_total, scratch.group_indices, segment_total, &opt, &bvh);
+    if (result != HAIROBB_OK) {
+        hairobb__free_groups(&scratch);
+        return result;
+    }
+    bvh->group_count = scratch.group_count;
+    bvh->group_first = scratch.group_first;
+    bvh->group_mask = scratch.group_mask;
+    bvh->vertex_first = scratch.vertex_first;
+    bvh->group_user = scratch.group_user;
+    bvh->group_mask_and = scratch.group_mask_and;
+    bvh->group_vertices = scratch.group_vertices;
+    bvh->group_tangents = scratch.group_tangents;
+    bvh->group_steps = scratch.group_steps;
+    bvh->group_indices = scratch.group_indices;
+    bvh->group_step_list = scratch.group_step_list;
+    *out = bvh;
+    return HAIROBB_OK;
+}
+
+HAIROBB_DEF hairobb_result hairobb_refit_group(hairobb_bvh *bvh, uint32_t group_id, const float *vertices, const float *tangents,
+                                               const float *const *time_vertices)
+{
+    size_t n, bytes, first;
+    float *saved;
+    hairobb_result result;
+    unsigned k, steps;
+    int step;
+    if (!bvh || !bvh->group_first || group_id >= bvh->group_count) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    steps = bvh->time_steps;
+    if ((steps ? !time_vertices || vertices : !vertices || time_vertices != NULL) ||
+        (bvh->basis == HAIROBB_BASIS_HERMITE) != (tangents != NULL))
+        return HAIROBB_ERROR_INVALID_ARGUMENT;
+    for (k = 0; k < steps; ++k)
+        if (!time_vertices[k]) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    first = bvh->vertex_first[group_id];
+    n = bvh->vertex_first[group_id + 1] - first;
+    bytes = 4 * sizeof(float) * n;
+    if (n == 0) return HAIROBB_OK;   /* a group without segments */
+    /* copied in, the old points kept until the new ones validate */
+    saved = HAIROBB__CAST(float *, HAIROBB_MALLOC(bytes * ((steps ? steps : 1u) + (tangents ? 1u : 0u)), bvh->allocator_user));
+    if (!saved) return HAIROBB_ERROR_OUT_OF_MEMORY;
+    for (step = steps ? 0 : -1; step < (int)steps; ++step) {
+        memcpy(saved + 4 * n * (size_t)(step + (steps ? 0 : 1)), hairobb__group_points(bvh, group_id, step), bytes);
+        memcpy(hairobb__group_points(bvh, group_id, step), steps ? time_vertices[step] : vertices, bytes);
+    }
+    if (tangents) {
+        memcpy(saved + 4 * n, bvh->group_tangents + 4 * first, bytes);
+        memcpy(bvh->group_tangents + 4 * first, tangents, bytes);
+    }
+    result = steps ? hairobb__refit_steps(bvh, bvh->group_step_list) : hairobb__refit_arrays(bvh, bvh->group_vertices, bvh->group_tangents);
+    if (result != HAIROBB_OK) {   /* as it was */
+        for (step = steps ? 0 : -1; step < (int)steps; ++step)
+            memcpy(hairobb__group_points(bvh, group_id, step), saved + 4 * n * (size_t)(step + (steps ? 0 : 1)), bytes);
+        if (tangents) memcpy(bvh->group_tangents + 4 * first, saved + 4 * n, bytes);
+    }
+    HAIROBB_FREE(saved, bvh->allocator_user);
+    return result;
+}
+
+HAIROBB_DEF uint32_t hairobb_group_count(const hairobb_bvh *bvh)
+{
+    return !bvh ? 0u : bvh->group_first ? bvh->group_count : 1u;
+}
+
+HAIROBB_DEF void *hairobb_group_user(const hairobb_bvh *bvh, uint32_t group_id)
+{
+    return bvh && bvh->group_first && group_id < bvh->group_count ? bvh->group_user[group_id] : NULL;
+}
+
+HAIROBB_DEF size_t hairobb_group_segments(const hairobb_bvh *bvh, uint32_t group_id)
+{
+    if (!bvh) return 0;
+    if (!bvh->group_first) return group_id == 0 ? bvh->segment_count : 0;
+    return group_id < bvh->group_count ? (size_t)(bvh->group_first[group_id + 1] - bvh->group_first[group_id]) : 0;
 }
 
 /* ------------------------------------------------------------------------ */
@@ -5586,7 +5892,7 @@ static size_t hairobb__saved_leaf_bytes(size_t leaf_prim_count) { return (sizeof
 
 HAIROBB_DEF size_t hairobb_save_size(const hairobb_bvh *bvh)
 {
-    if (!bvh) return 0;
+    if (!bvh || bvh->group_first) return 0;
     return HAIROBB__SAVE_HEADER + bvh->node_bytes + hairobb__saved_leaf_bytes(bvh->leaf_prim_count) +
            (bvh->leaf_ranges ? 2 * sizeof(float) * bvh->leaf_prim_count : 0) + 8;
 }
@@ -5596,6 +5902,7 @@ HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, si
     unsigned char *out = HAIROBB__CAST(unsigned char *, buffer);
     size_t total = hairobb_save_size(bvh), leaf_bytes;
     int k;
+    if (bvh && bvh->group_first) return HAIROBB_ERROR_UNSUPPORTED;
     if (!bvh || !out || size < total) return HAIROBB_ERROR_INVALID_ARGUMENT;
     memset(out, 0, HAIROBB__SAVE_HEADER);
     memcpy(out, hairobb__save_magic, sizeof hairobb__save_magic);
@@ -6045,6 +6352,11 @@ typedef struct hairobb__ray_state {
     int cull_back_faces;        /* tubes: back_faces OFF */
     uint32_t skip_prim;
     float skip_first[3], skip_last[3];
+    /* groups (>>groups): the ray's mask, and whether it excludes some group
+       (then each segment's group is looked up at the leaf) */
+    uint32_t ray_mask;
+    int group_masked;
+    const hairobb_bvh *bvh_groups;    /* the BVH traced, where group_masked */
 } hairobb__ray_state;
 
 #define HAIROBB__TINY_DIR 1e-18f
@@ -6113,6 +6425,7 @@ static int hairobb__ray_setup(hairobb__ray_state *rs, const hairobb_bvh *bvh, co
     rs->cull_back_faces = bvh->cull_back_faces;
     rs->placed = NULL;
     rs->instance_id = HAIROBB_INVALID_ID;
+    rs->group_masked = 0;   /* ray_mask and bvh_groups are read only where it is set (hairobb__set_filters) */
     rs->dir_length = sqrtf(hairobb__dot3(ray->dir, ray->dir));
     if (!(rs->dir_length > 0.0f) || !(rs->dir_length < INFINITY) || !(rs->tnear <= rs->tfar)) return 0;
     if (bvh->time_steps && !(rs->time >= 0.0f && rs->time <= 1.0f)) return 0;   /* NaN too */
@@ -6155,9 +6468,17 @@ static int hairobb__ray_setup_from(hairobb__ray_state *rs, const hairobb_bvh *bv
 {
     const float *cp;
     float max_r, magnitude, scratch[16];
+    uint32_t prim;
     if (!hairobb__ray_setup(rs, bvh, ray)) return 0;
-    if (!from || from->prim_id >= bvh->segment_count) return 1;
-    cp = hairobb__segment_points(bvh, from->prim_id, rs->time, scratch);
+    if (!from) return 1;
+    prim = from->prim_id;
+    if (bvh->group_first) {   /* the group's segment in the concatenation */
+        if (from->group_id >= bvh->group_count || prim >= bvh->group_first[from->group_id + 1] - bvh->group_first[from->group_id])
+            return 1;
+        prim += bvh->group_first[from->group_id];
+    }
+    if (prim >= bvh->segment_count) return 1;
+    cp = hairobb__segment_points(bvh, prim, rs->time, scratch);
     max_r = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
     magnitude = hairobb__maxf(hairobb__maxf(fabsf(ray->org[0]), fabsf(ray->org[1])), fabsf(ray->org[2]));
     rs->skip_t = (2.0f * max_r + magnitude * (8.0f * FLT_EPSILON)) * rs->inv_dir_length;
@@ -6168,7 +6489,7 @@ static int hairobb__ray_setup_from(hairobb__ray_state *rs, const hairobb_bvh *bv
        skipped within the band, so a ray going in finds the fibre's far
        side. */
     if (bvh->shape == HAIROBB_SHAPE_ROUND) rs->skip_sheet = hairobb__dot3(ray->dir, from->Ng) > 0.0f ? -1.0f : 1.0f;
-    rs->skip_prim = from->prim_id;
+    rs->skip_prim = prim;
     memcpy(rs->skip_first, cp, sizeof rs->skip_first);
     memcpy(rs->skip_last, cp + 12, sizeof rs->skip_last);
     return 1;
@@ -6581,6 +6902,33 @@ HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uin
     /* likely: the default's copy, the other paths out of its way */
     if (HAIROBB__LIKELY(bvh->leaf_points != NULL)) return bvh->leaf_points + 16 * (size_t)bvh->point_refs[prim];
     return hairobb__points_at(bvh, 4 * (size_t)bvh->indices[prim], time, scratch);
+}
+
+/* The group of segment prim (>>groups): the last g with group_first[g] <=
+   prim, by halving (groups are few next to segments; only a hit's ids, a
+   mask that excludes groups, and joints and skips at group ends ask). 0
+   for hairobb_build's one group. */
+HAIROBB__INLINE uint32_t hairobb__group_of(const hairobb_bvh *bvh, uint32_t prim)
+{
+    uint32_t lo = 0, hi;
+    if (!bvh->group_first) return 0;
+    hi = bvh->group_count;   /* group_first[lo] <= prim < group_first[hi] */
+    while (hi - lo > 1) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (bvh->group_first[mid] <= prim) lo = mid;
+        else hi = mid;
+    }
+    return lo;
+}
+
+/* Whether segments prim and prim + 1 (next) or prim - 1 are of one group:
+   strands do not join across groups. */
+HAIROBB__INLINE int hairobb__same_group(const hairobb_bvh *bvh, uint32_t prim, int next)
+{
+    uint32_t boundary;
+    if (!bvh->group_first) return 1;
+    boundary = bvh->group_first[hairobb__group_of(bvh, prim) + (next ? 1u : 0u)];
+    return next ? prim + 1u < boundary : prim > boundary;
 }
 
 /* ------------------------------------------------------------------------ */
@@ -7029,6 +7377,10 @@ static int hairobb__accept(hairobb__ray_state *rs, uint32_t prim, float u, float
 {
     if (!(x * x + y * y <= r * r) || !(t >= rs->tnear) || !(t <= rs->tfar)) return 0;
     if (t == rs->tfar && prim > rs->hit_prim) return 0;
+    /* a group the ray's mask excludes: its hits are not taken (tested here,
+       where hits are few, a ray whose mask excludes no group pays nothing
+       per segment) */
+    if (rs->group_masked && !(rs->bvh_groups->group_mask[hairobb__group_of(rs->bvh_groups, prim)] & rs->ray_mask)) return 0;
     if (rs->filtering) {
         /* occluded1 takes one hit: the filter is shown none after it */
         if (rs->any_hit && rs->hit_prim != HAIROBB_INVALID_ID) return 0;
@@ -7178,7 +7530,7 @@ static int hairobb__joint_at(const hairobb_bvh *bvh, uint32_t prim, int end, flo
     float scratch[2][16], a[3], b[3], cross[3];
     const float *p, *q;
     int k;
-    if (end ? (size_t)prim + 1 >= bvh->segment_count : prim == 0) return 0;
+    if ((end ? (size_t)prim + 1 >= bvh->segment_count : prim == 0) || !hairobb__same_group(bvh, prim, end)) return 0;
     p = hairobb__segment_points(bvh, prim, time, scratch[0]) + 12 * end;
     q = hairobb__segment_points(bvh, end ? prim + 1 : prim - 1, time, scratch[1]) + 12 * (1 - end);
     if (!(p[0] == q[0] && p[1] == q[1] && p[2] == q[2])) return 0;
@@ -8070,12 +8422,14 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
     return 1;
 }
 
-/* The segment a secondary ray leaves, or one joined to its ends. */
-static int hairobb__skipped(const hairobb__ray_state *rs, uint32_t prim, const float *cp)
+/* The segment a secondary ray leaves, or one joined to its ends (in its
+   own group). */
+static int hairobb__skipped(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint32_t prim, const float *cp)
 {
     return prim == rs->skip_prim ||
-           (cp[0] == rs->skip_last[0] && cp[1] == rs->skip_last[1] && cp[2] == rs->skip_last[2]) ||
-           (cp[12] == rs->skip_first[0] && cp[13] == rs->skip_first[1] && cp[14] == rs->skip_first[2]);
+           (((cp[0] == rs->skip_last[0] && cp[1] == rs->skip_last[1] && cp[2] == rs->skip_last[2]) ||
+             (cp[12] == rs->skip_first[0] && cp[13] == rs->skip_first[1] && cp[14] == rs->skip_first[2])) &&
+            hairobb__group_of(bvh, prim) == hairobb__group_of(bvh, rs->skip_prim));
 }
 
 static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint64_t ref, int any_hit)
@@ -8094,7 +8448,7 @@ static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *r
         const float *cp = copy ? copy + 16 * i
                                : hairobb__points_at(bvh, 4 * (size_t)bvh->leaf_offsets[first + i], rs->time, scratch);
         if (HAIROBB__LEAF_VISIT(rs, prim)) continue;
-        if (rs->skip_t > 0.0f && hairobb__skipped(rs, prim, cp)) {
+        if (rs->skip_t > 0.0f && hairobb__skipped(bvh, rs, prim, cp)) {
             if (rs->skip_sheet != 0.0f) {
                 rs->skipping = 1;   /* a tube: one sheet, near the origin (hairobb__tube_hit) */
                 hit = hairobb__intersect_segment(bvh, rs, prim, cp, any_hit);
@@ -8173,6 +8527,16 @@ static void hairobb__tube_hit_at(const hairobb__ray_state *rs, const float *cp, 
 
 /* Hit attributes of the hit at u, t on segment prim, c in ray space:
    computed once for the final hit, and for each one a hit filter is shown. */
+/* A hit's ids: its group and the segment's index in it (a scene maps
+   instance_id after). */
+HAIROBB__INLINE void hairobb__hit_ids(const hairobb_bvh *bvh, uint32_t prim, hairobb_hit *hit)
+{
+    uint32_t group = hairobb__group_of(bvh, prim);
+    hit->group_id = group;
+    hit->prim_id = bvh->group_first ? prim - bvh->group_first[group] : prim;
+    hit->instance_id = HAIROBB_INVALID_ID;
+}
+
 static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint32_t prim, const float *points,
                             const hairobb__ray_curve *c, float u, float t, int cap, hairobb_hit *hit)
 {
@@ -8182,8 +8546,7 @@ static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs
         hairobb__tube_hit_at(rs, cp, u, t, cap, hit);
         hit->t = t;
         hit->u = u;
-        hit->prim_id = prim;
-        hit->instance_id = HAIROBB_INVALID_ID;
+        hairobb__hit_ids(bvh, prim, hit);
         return;
     }
     hairobb__v4 x4 = hairobb__v4_load(c->x), y4 = hairobb__v4_load(c->y), z4 = hairobb__v4_set1(0.0f), r4 = hairobb__v4_load(c->r);
@@ -8219,8 +8582,7 @@ static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs
     memcpy(hit->Ng, n, sizeof hit->Ng);
     hit->t = t;
     hit->u = u;
-    hit->prim_id = prim;
-    hit->instance_id = HAIROBB_INVALID_ID;
+    hairobb__hit_ids(bvh, prim, hit);
 }
 
 /* The segment is moved to ray space again: the intersector's copy is not
@@ -8231,7 +8593,7 @@ static int hairobb__shares_end(const hairobb_bvh *bvh, uint32_t prim, int end, f
 {
     float scratch[16];
     const float *q;
-    if (end ? (size_t)prim + 1 >= bvh->segment_count : prim == 0) return 0;
+    if ((end ? (size_t)prim + 1 >= bvh->segment_count : prim == 0) || !hairobb__same_group(bvh, prim, end)) return 0;
     q = hairobb__segment_points(bvh, end ? prim + 1 : prim - 1, time, scratch) + 12 * (1 - end);
     cp += 12 * end;
     return cp[0] == q[0] && cp[1] == q[1] && cp[2] == q[2];
@@ -8319,6 +8681,13 @@ HAIROBB__INLINE void hairobb__set_filters(hairobb__ray_state *rs, const hairobb_
     rs->call_filter_user = context ? context->user : NULL;
     rs->filtering = rs->hit_filter != NULL || rs->call_filter != NULL;
     rs->ignored_count[0] = rs->ignored_count[1] = 0;
+    if (!HAIROBB__LIKELY(bvh->group_first == NULL)) {   /* groups: does the ray's mask exclude one? */
+        uint32_t g;
+        rs->ray_mask = context && context->mask ? context->mask : 0xffffffffu;
+        rs->bvh_groups = bvh;
+        if (!(rs->ray_mask & bvh->group_mask_and))
+            for (g = 0; g < bvh->group_count && !rs->group_masked; ++g) rs->group_masked = !(bvh->group_mask[g] & rs->ray_mask);
+    }
 }
 
 HAIROBB_DEF int hairobb_intersect1_context(const hairobb_bvh *bvh, const hairobb_context *context, const hairobb_hit *from,
@@ -8330,7 +8699,7 @@ HAIROBB_DEF int hairobb_intersect1_context(const hairobb_bvh *bvh, const hairobb
     /* `from` is read (into rs) before *hit is written: the two may be one
        hit, as a path tracer's loop passes them */
     ready = bvh && ray && hairobb__ray_setup_from(&rs, bvh, from, ray);
-    hit->prim_id = hit->instance_id = HAIROBB_INVALID_ID;
+    hit->prim_id = hit->instance_id = hit->group_id = HAIROBB_INVALID_ID;
     if (!ready) return 0;
     hairobb__set_filters(&rs, bvh, context, 0);
     if (!hairobb__trace(bvh, &rs, 0)) return 0;
@@ -8738,7 +9107,7 @@ HAIROBB_DEF int hairobb_scene_intersect1(const hairobb_scene *scene, const hairo
     int sp = 1;
     if (!hit) return 0;
     if (from) leaving = *from;   /* read before *hit is written: they may be one hit */
-    hit->prim_id = hit->instance_id = HAIROBB_INVALID_ID;
+    hit->prim_id = hit->instance_id = hit->group_id = HAIROBB_INVALID_ID;
     if (!scene || !ray) return 0;
     best_t = ray->tfar;
     if (!hairobb__scene_walk_start(&walk, scene, context, ray, &best_t)) return 0;
@@ -8839,6 +9208,9 @@ HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairob
 #define hairobb__ribbon_f_v8 hairobb__ribbon_f_v8_avx2
 #define hairobb__segment_points hairobb__segment_points_avx2
 #define hairobb__skipped hairobb__skipped_avx2
+#define hairobb__group_of hairobb__group_of_avx2
+#define hairobb__same_group hairobb__same_group_avx2
+#define hairobb__hit_ids hairobb__hit_ids_avx2
 #define hairobb__solve_bracketed hairobb__solve_bracketed_avx2
 #define hairobb__to_bezier hairobb__to_bezier_avx2
 #define hairobb__to_power_form hairobb__to_power_form_avx2

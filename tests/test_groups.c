@@ -1,0 +1,502 @@
+/* test_groups.c - several hair groups in one BVH (hairobb_build_groups,
+   GROUPS), each against one BVH (hairobb_build) over the same hair: the
+   groups' arrays concatenated in group order, so that segment p of group g
+   is segment group_first[g] + p there.
+
+   - Strands dealt to 1, 4 and 16 groups in groom order (strand i to group
+     i % k: every group spans the fur) and in space order, ribbons and
+     tubes (caps on): camera rays and rays aimed at segments hit the same
+     segments, bit for bit (t, u, v, Ng, tangent), the ids mapped; occluded1
+     agrees; a secondary ray from each hit (_from) as the one BVH's.
+   - Masks: each group's mask a bit of its own (group g: bit g % 32, one
+     group 0 = every bit), rays with random masks: the one BVH with a filter
+     that ignores the hits of groups the mask excludes gives the same hits.
+   - Filters see each hit's group and its segment within the group.
+   - hairobb_refit_group moves one group: the same hits as a one BVH built
+     over the moved hair; a bad refit is refused and leaves the BVH as it
+     was. Motion blur (2 steps): the same hits at ray times 0, 0.3, 1.
+   - Instances: a scene over a multi-group BVH gives its hits with
+     instance_id.
+   - Bad input: no groups, NULL arrays, an index past its own group's
+     points (INDEX_OUT_OF_RANGE even where the concatenation would reach
+     the next group), NaN; an empty group is never hit; failed
+     allocations leak nothing. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "test_alloc.h"
+#define HAIROBB_IMPLEMENTATION
+#include "../hairobb.h"
+#include "check.h"
+#include "compare.h"
+#include "scenes.h"
+
+#define MAX_GROUPS 16
+
+/* A scene's strands dealt to groups: each group's own arrays, and the
+   concatenation in group order (one BVH's input). */
+typedef struct grouped {
+    size_t count;
+    hairobb_group group[MAX_GROUPS];
+    float *vertices[MAX_GROUPS];
+    uint32_t *indices[MAX_GROUPS];
+    float *all_vertices;        /* the concatenation */
+    uint32_t *all_indices;
+    size_t all_vertex_count, all_segment_count;
+    uint32_t first[MAX_GROUPS + 1];   /* group g's segments in the concatenation */
+} grouped;
+
+/* Strand i (Bezier segments sharing end points, indices 3 apart) goes to
+   group i % k (groom order) or to group i * k / strands (space order: the
+   scenes generate strands by position). */
+static void group_strands(grouped *out, const hair_scene *s, size_t k, int space_order)
+{
+    size_t i, strands = 0, g, strand = 0;
+    size_t *first_segment = (size_t *)malloc(sizeof(size_t) * (s->segment_count + 1));
+    memset(out, 0, sizeof *out);
+    out->count = k;
+    for (i = 0; i < s->segment_count; ++i)
+        if (i == 0 || s->indices[i] != s->indices[i - 1] + 3) first_segment[strands++] = i;
+    first_segment[strands] = s->segment_count;
+    for (g = 0; g < k; ++g) {
+        size_t points = 0, segments = 0;
+        for (strand = 0; strand < strands; ++strand) {
+            size_t owner = space_order ? strand * k / strands : strand % k;
+            if (owner != g) continue;
+            segments += first_segment[strand + 1] - first_segment[strand];
+            points += 3 * (first_segment[strand + 1] - first_segment[strand]) + 1;
+        }
+        out->vertices[g] = (float *)malloc(16 * (points ? points : 1));
+        out->indices[g] = (uint32_t *)malloc(4 * (segments ? segments : 1));
+        points = segments = 0;
+        for (strand = 0; strand < strands; ++strand) {
+            size_t owner = space_order ? strand * k / strands : strand % k, a = first_segment[strand], b = first_segment[strand + 1], j;
+            size_t n = 3 * (b - a) + 1;
+            if (owner != g) continue;
+            memcpy(out->vertices[g] + 4 * points, s->vertices + 4 * (size_t)s->indices[a], 16 * n);
+            for (j = a; j < b; ++j) out->indices[g][segments++] = (uint32_t)(points + 3 * (j - a));
+            points += n;
+        }
+        out->group[g].vertices = out->vertices[g];
+        out->group[g].vertex_count = points;
+        out->group[g].indices = out->indices[g];
+        out->group[g].segment_count = segments;
+        out->group[g].mask = g == 1 ? 0u : 1u << (g % 32);
+        out->group[g].user = out;
+        out->all_vertex_count += points;
+        out->all_segment_count += segments;
+    }
+    out->all_vertices = (float *)malloc(16 * out->all_vertex_count);
+    out->all_indices = (uint32_t *)malloc(4 * out->all_segment_count);
+    {
+        size_t vbase = 0, sbase = 0, j;
+        for (g = 0; g < k; ++g) {
+            memcpy(out->all_vertices + 4 * vbase, out->vertices[g], 16 * out->group[g].vertex_count);
+            out->first[g] = (uint32_t)sbase;
+            for (j = 0; j < out->group[g].segment_count; ++j) out->all_indices[sbase + j] = out->indices[g][j] + (uint32_t)vbase;
+            vbase += out->group[g].vertex_count;
+            sbase += out->group[g].segment_count;
+        }
+        out->first[k] = (uint32_t)sbase;
+    }
+    free(first_segment);
+}
+
+static void grouped_free(grouped *gr)
+{
+    size_t g;
+    for (g = 0; g < gr->count; ++g) {
+        free(gr->vertices[g]);
+        free(gr->indices[g]);
+    }
+    free(gr->all_vertices);
+    free(gr->all_indices);
+}
+
+/* The one BVH's hit with its ids as the multi-group BVH names them. */
+static void map_ids(const grouped *gr, hairobb_hit *hit)
+{
+    uint32_t g = 0;
+    while (g + 1 < gr->count && gr->first[g + 1] <= hit->prim_id) ++g;
+    hit->prim_id -= gr->first[g];
+    hit->group_id = g;
+}
+
+/* A filter on the one BVH: ignores the hits of the groups the ray's mask
+   excludes (user: the grouped hair and the mask, in a mask_filter). */
+typedef struct mask_filter {
+    const grouped *gr;
+    uint32_t mask;
+} mask_filter;
+
+static int mask_filter_fn(void *user, const hairobb_ray *ray, const hairobb_hit *hit)
+{
+    const mask_filter *m = (const mask_filter *)user;
+    hairobb_hit mapped = *hit;
+    uint32_t group_mask;
+    (void)ray;
+    map_ids(m->gr, &mapped);
+    group_mask = m->gr->group[mapped.group_id].mask ? m->gr->group[mapped.group_id].mask : 0xffffffffu;
+    return (group_mask & m->mask) != 0;
+}
+
+/* A filter on the multi-group BVH that checks what it is shown and takes
+   every hit. */
+typedef struct shown_ids {
+    const grouped *gr;
+    size_t shown, bad;
+} shown_ids;
+
+static int check_ids(void *user, const hairobb_ray *ray, const hairobb_hit *hit)
+{
+    shown_ids *s = (shown_ids *)user;
+    (void)ray;
+    ++s->shown;
+    s->bad += hit->group_id >= s->gr->count || hit->prim_id >= s->gr->group[hit->group_id].segment_count ||
+              hit->instance_id != HAIROBB_INVALID_ID;
+    return 1;
+}
+
+static void make_rays(const grouped *gr, const hair_scene *s, size_t n, uint64_t seed, float *org, float *dir)
+{
+    size_t side = 64, i;
+    scene_rng rng;
+    scene_camera_rays(s, (int)side, (int)side, org, dir);
+    scene_rng_seed(&rng, seed);
+    for (i = side * side; i < n; ++i) {
+        size_t prim = (size_t)(scene_rng_float(&rng) * (float)gr->all_segment_count) % gr->all_segment_count;
+        scene_ray_near_segment(gr->all_vertices + 4 * (size_t)gr->all_indices[prim], &rng, org + 3 * i, dir + 3 * i);
+    }
+}
+
+/* The multi-group BVH against the one BVH: hits, occlusion, a bounce from
+   each hit, ray masks, what filters are shown. */
+static void compare_groups(const char *name, const grouped *gr, const hair_scene *s, const hairobb_build_options *options,
+                           const float *org, const float *dir, size_t rays)
+{
+    hairobb_bvh *groups = NULL, *one = NULL;
+    hairobb_build_options one_options = *options;
+    size_t i, hits = 0, differ = 0, occluded_differ = 0, bounce_differ = 0, masked_differ = 0, mask_changed = 0;
+    shown_ids shown;
+    mask_filter mf;
+    hairobb_context shown_context, mask_context;
+    hairobb_result r = hairobb_build_groups(gr->group, gr->count, options, &groups);
+    CHECK(r == HAIROBB_OK, "%s: hairobb_build_groups: %s", name, hairobb_result_string(r));
+    CHECK(hairobb_build(gr->all_vertices, gr->all_vertex_count, gr->all_indices, gr->all_segment_count, &one_options, &one) == HAIROBB_OK,
+          "%s: one BVH", name);
+    if (!groups || !one) return;
+    CHECK(hairobb_group_count(groups) == gr->count && hairobb_group_user(groups, 0) == gr &&
+              hairobb_group_segments(groups, (uint32_t)gr->count - 1) == gr->group[gr->count - 1].segment_count &&
+              hairobb_group_segments(groups, (uint32_t)gr->count) == 0 && hairobb_group_count(one) == 1,
+          "%s: group count, users and segment counts", name);
+    memset(&shown, 0, sizeof shown);
+    shown.gr = gr;
+    shown_context.filter = check_ids;
+    shown_context.user = &shown;
+    shown_context.mask = 0;
+    mf.gr = gr;
+    mask_context.filter = mask_filter_fn;
+    mask_context.user = &mf;
+    mask_context.mask = 0;
+    for (i = 0; i < rays; ++i) {
+        hairobb_ray ray;
+        hairobb_hit a, b, shown_hit;
+        int got_a, got_b;
+        memcpy(ray.org, org + 3 * i, sizeof ray.org);
+        memcpy(ray.dir, dir + 3 * i, sizeof ray.dir);
+        ray.tnear = 0.0f;
+        ray.tfar = INFINITY;
+        ray.time = 0.0f;
+        got_a = hairobb_intersect1(groups, &ray, &a);
+        got_b = hairobb_intersect1(one, &ray, &b);
+        if (got_b) map_ids(gr, &b);
+        hits += (size_t)got_a;
+        differ += !same_hit(got_a, &a, got_b, &b);
+        occluded_differ += hairobb_occluded1(groups, &ray) != got_a;
+        if (hairobb_intersect1_context(groups, &shown_context, NULL, &ray, &shown_hit) != got_a) ++differ;
+        if (got_a && got_b) {   /* a bounce: reflected about Ng, from the hit */
+            hairobb_ray bounce = ray;
+            hairobb_hit from_b = b, next_a, next_b;
+            float along = 2.0f * (ray.dir[0] * a.Ng[0] + ray.dir[1] * a.Ng[1] + ray.dir[2] * a.Ng[2]);
+            int k, ga, gb;
+            for (k = 0; k < 3; ++k) {
+                bounce.org[k] = ray.org[k] + a.t * ray.dir[k];
+                bounce.dir[k] = ray.dir[k] - along * a.Ng[k];
+            }
+            from_b.prim_id += gr->first[from_b.group_id];   /* the one BVH's own id */
+            ga = hairobb_intersect1_from(groups, &a, &bounce, &next_a);
+            gb = hairobb_intersect1_from(one, &from_b, &bounce, &next_b);
+            if (gb) map_ids(gr, &next_b);
+            bounce_differ += !same_hit(ga, &next_a, gb, &next_b);
+        }
+        {   /* a ray mask: the one BVH ignores the excluded groups' hits */
+            hairobb_context masked;
+            hairobb_hit ma, mb;
+            int gm, gn;
+            uint32_t mask = (uint32_t)(i * 2654435761u) | (i % 3 == 0 ? 0u : 1u << 31);
+            if (i % 7 == 0) mask = 0;   /* every bit */
+            masked.filter = NULL;
+            masked.user = NULL;
+            masked.mask = mask;
+            mf.mask = mask ? mask : 0xffffffffu;
+            gm = hairobb_intersect1_context(groups, &masked, NULL, &ray, &ma);
+            gn = hairobb_intersect1_context(one, &mask_context, NULL, &ray, &mb);
+            if (gn) map_ids(gr, &mb);
+            masked_differ += !same_hit(gm, &ma, gn, &mb) || hairobb_occluded1_context(groups, &masked, NULL, &ray) != gm;
+            mask_changed += !same_hit(gm, &ma, got_a, &a);
+        }
+    }
+    printf("%s: %zu groups, %zu rays, %zu hits: %zu differ from one BVH over the same hair, occluded1 %zu, bounces %zu, "
+           "ray masks %zu (the mask changed %zu hits); filters shown %zu hits, %zu with bad ids; memory %zu bytes (one BVH %zu)\n",
+           name, gr->count, rays, hits, differ, occluded_differ, bounce_differ, masked_differ, mask_changed, shown.shown, shown.bad,
+           hairobb_memory_bytes(groups), hairobb_memory_bytes(one));
+    CHECK(hits > rays / 4, "%s: %zu hits", name, hits);
+    CHECK(differ == 0 && occluded_differ == 0 && bounce_differ == 0 && masked_differ == 0,
+          "%s: %zu hits, %zu occlusions, %zu bounces, %zu masked rays differ", name, differ, occluded_differ, bounce_differ, masked_differ);
+    CHECK(gr->count == 1 || mask_changed > hits / 10, "%s: ray masks changed only %zu hits", name, mask_changed);
+    CHECK(shown.shown >= hits && shown.bad == 0, "%s: filters shown %zu hits, %zu with bad ids", name, shown.shown, shown.bad);
+    hairobb_free(groups);
+    hairobb_free(one);
+    (void)s;
+}
+
+/* hairobb_refit_group against a one BVH built over the moved hair. */
+static void test_refit_group(const grouped *gr_in, const float *org, const float *dir, size_t rays)
+{
+    grouped gr = *gr_in;   /* shallow: group 1's vertices replaced below */
+    hairobb_bvh *groups = NULL, *one = NULL;
+    size_t n = gr.group[1].vertex_count, i, differ = 0, hits = 0;
+    float *moved = (float *)malloc(16 * n), *all = (float *)malloc(16 * gr.all_vertex_count), *bad = (float *)malloc(16 * n);
+    size_t vbase = gr.group[0].vertex_count;
+    hairobb_result r;
+    for (i = 0; i < 4 * n; ++i) moved[i] = gr.vertices[1][i] + ((i & 3) == 1 ? 0.05f : 0.0f);   /* up by 0.05 */
+    memcpy(all, gr.all_vertices, 16 * gr.all_vertex_count);
+    memcpy(all + 4 * vbase, moved, 16 * n);
+    memcpy(bad, moved, 16 * n);
+    bad[4 * (n / 2)] = NAN;
+    CHECK(hairobb_build_groups(gr.group, gr.count, NULL, &groups) == HAIROBB_OK, "refit: builds");
+    CHECK(hairobb_build(all, gr.all_vertex_count, gr.all_indices, gr.all_segment_count, NULL, &one) == HAIROBB_OK, "refit: one BVH");
+    if (!groups || !one) return;
+    r = hairobb_refit_group(groups, 1, bad, NULL, NULL);
+    CHECK(r == HAIROBB_ERROR_INVALID_GEOMETRY, "refit_group with a NaN: %s", hairobb_result_string(r));
+    CHECK(hairobb_refit_group(groups, (uint32_t)gr.count, moved, NULL, NULL) == HAIROBB_ERROR_INVALID_ARGUMENT &&
+              hairobb_refit(groups, gr.all_vertices) == HAIROBB_ERROR_INVALID_ARGUMENT,
+          "refit of a group out of range, and hairobb_refit of a multi-group BVH, refused");
+    r = hairobb_refit_group(groups, 1, moved, NULL, NULL);
+    CHECK(r == HAIROBB_OK, "refit_group: %s", hairobb_result_string(r));
+    memset(moved, 0, 16 * n);   /* the BVH keeps its own copy */
+    for (i = 0; i < rays; ++i) {
+        hairobb_ray ray;
+        hairobb_hit a, b;
+        int got_a, got_b;
+        memcpy(ray.org, org + 3 * i, sizeof ray.org);
+        memcpy(ray.dir, dir + 3 * i, sizeof ray.dir);
+        ray.tnear = 0.0f;
+        ray.tfar = INFINITY;
+        ray.time = 0.0f;
+        got_a = hairobb_intersect1(groups, &ray, &a);
+        got_b = hairobb_intersect1(one, &ray, &b);
+        if (got_b) map_ids(&gr, &b);
+        hits += (size_t)got_a;
+        differ += !same_hit(got_a, &a, got_b, &b);
+    }
+    {   /* not in the saved format yet: refused, not written wrong */
+        unsigned char byte = 0;
+        CHECK(hairobb_save_size(groups) == 0 && hairobb_save(groups, &byte, 1) == HAIROBB_ERROR_UNSUPPORTED,
+              "a multi-group BVH's save is refused");
+    }
+    printf("refit_group (group 1 of %zu moved, after a refused refit): %zu rays, %zu hits, %zu differ from one BVH built moved\n",
+           gr.count, rays, hits, differ);
+    CHECK(differ == 0 && hits > rays / 4, "refit_group: %zu differ, %zu hits", differ, hits);
+    hairobb_free(groups);
+    hairobb_free(one);
+    free(moved);
+    free(all);
+    free(bad);
+}
+
+/* Motion blur: the groups' steps against one BVH over the concatenated steps. */
+static void test_motion(const grouped *gr, const float *org, const float *dir, size_t rays)
+{
+    static const float times[3] = {0.0f, 0.3f, 1.0f};
+    hairobb_group moving[MAX_GROUPS];
+    const float *steps[MAX_GROUPS][2], *all_steps[2];
+    float *later[MAX_GROUPS], *all_later = (float *)malloc(16 * gr->all_vertex_count);
+    hairobb_build_options o = hairobb_default_options();
+    hairobb_bvh *groups = NULL, *one = NULL;
+    size_t g, i, differ = 0, hits = 0, vbase = 0;
+    for (g = 0; g < gr->count; ++g) {
+        size_t n = gr->group[g].vertex_count, j;
+        later[g] = (float *)malloc(16 * (n ? n : 1));
+        for (j = 0; j < 4 * n; ++j) later[g][j] = gr->vertices[g][j] + ((j & 3) == 0 ? 0.03f * (float)(g + 1) : 0.0f);
+        memcpy(all_later + 4 * vbase, later[g], 16 * n);
+        vbase += n;
+        steps[g][0] = gr->vertices[g];
+        steps[g][1] = later[g];
+        moving[g] = gr->group[g];
+        moving[g].vertices = NULL;
+        moving[g].time_vertices = steps[g];
+    }
+    all_steps[0] = gr->all_vertices;
+    all_steps[1] = all_later;
+    o.time_steps = 2;
+    CHECK(hairobb_build_groups(moving, gr->count, &o, &groups) == HAIROBB_OK, "motion: builds");
+    o.time_vertices = all_steps;
+    CHECK(hairobb_build(NULL, gr->all_vertex_count, gr->all_indices, gr->all_segment_count, &o, &one) == HAIROBB_OK, "motion: one BVH");
+    for (i = 0; groups && one && i < rays; ++i) {
+        hairobb_ray ray;
+        hairobb_hit a, b;
+        int got_a, got_b;
+        memcpy(ray.org, org + 3 * i, sizeof ray.org);
+        memcpy(ray.dir, dir + 3 * i, sizeof ray.dir);
+        ray.tnear = 0.0f;
+        ray.tfar = INFINITY;
+        ray.time = times[i % 3];
+        got_a = hairobb_intersect1(groups, &ray, &a);
+        got_b = hairobb_intersect1(one, &ray, &b);
+        if (got_b) map_ids(gr, &b);
+        hits += (size_t)got_a;
+        differ += !same_hit(got_a, &a, got_b, &b);
+    }
+    printf("motion (2 steps, rays at times 0, 0.3, 1): %zu rays, %zu hits, %zu differ from one BVH\n", rays, hits, differ);
+    CHECK(differ == 0 && hits > rays / 4, "motion: %zu differ, %zu hits", differ, hits);
+    hairobb_free(groups);
+    hairobb_free(one);
+    for (g = 0; g < gr->count; ++g) free(later[g]);
+    free(all_later);
+}
+
+/* A scene placing a multi-group BVH twice (identity, and moved): its hits
+   in the first instance are the BVH's own, with instance_id. */
+static void test_instances(const grouped *gr, const float *org, const float *dir, size_t rays)
+{
+    hairobb_bvh *groups = NULL;
+    hairobb_scene *scene = NULL;
+    hairobb_instance inst[2];
+    size_t i, differ = 0, hits = 0;
+    int k;
+    CHECK(hairobb_build_groups(gr->group, gr->count, NULL, &groups) == HAIROBB_OK, "instances: builds");
+    memset(inst, 0, sizeof inst);
+    for (k = 0; k < 2; ++k) {
+        inst[k].bvh = groups;
+        inst[k].transform[0] = inst[k].transform[5] = inst[k].transform[10] = 1.0f;
+    }
+    inst[1].transform[3] = 1000.0f;   /* far off: never in the way */
+    CHECK(groups && hairobb_scene_build(inst, 2, NULL, &scene) == HAIROBB_OK, "instances: the scene builds");
+    for (i = 0; scene && i < rays; ++i) {
+        hairobb_ray ray;
+        hairobb_hit a, b;
+        int got_a, got_b;
+        memcpy(ray.org, org + 3 * i, sizeof ray.org);
+        memcpy(ray.dir, dir + 3 * i, sizeof ray.dir);
+        ray.tnear = 0.0f;
+        ray.tfar = INFINITY;
+        ray.time = 0.0f;
+        got_a = hairobb_scene_intersect1(scene, NULL, NULL, &ray, &a);
+        got_b = hairobb_intersect1(groups, &ray, &b);
+        hits += (size_t)got_a;
+        differ += got_a != got_b || (got_a && (a.instance_id != 0 || a.group_id != b.group_id || a.prim_id != b.prim_id || a.t != b.t));
+    }
+    printf("a scene over a multi-group BVH: %zu rays, %zu hits, %zu differ from the BVH's own\n", rays, hits, differ);
+    CHECK(differ == 0 && hits > rays / 4, "instances: %zu differ, %zu hits", differ, hits);
+    hairobb_scene_free(scene);
+    hairobb_free(groups);
+}
+
+static void test_bad_input(const grouped *gr)
+{
+    hairobb_group g[3];
+    hairobb_bvh *bvh = (hairobb_bvh *)(void *)g;
+    uint32_t past[1];
+    float nan_points[16];
+    hairobb_result r;
+    test_allocator a;
+    long fail;
+    int k;
+    memcpy(g, gr->group, 2 * sizeof g[0]);
+    CHECK(hairobb_build_groups(NULL, 2, NULL, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT && bvh == NULL, "NULL groups");
+    CHECK(hairobb_build_groups(g, 0, NULL, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT && bvh == NULL, "no groups");
+    CHECK(hairobb_build_groups(g, 2, NULL, NULL) == HAIROBB_ERROR_INVALID_ARGUMENT, "no out");
+    g[1].indices = NULL;
+    CHECK(hairobb_build_groups(g, 2, NULL, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT, "a group's NULL indices");
+    g[1] = gr->group[1];
+    /* the last point a segment would read is past its own group's points,
+       though group 2's follow in the concatenation */
+    past[0] = (uint32_t)g[1].vertex_count - 3;
+    g[1].indices = past;
+    g[1].segment_count = 1;
+    g[2] = gr->group[0];
+    r = hairobb_build_groups(g, 3, NULL, &bvh);
+    CHECK(r == HAIROBB_ERROR_INDEX_OUT_OF_RANGE && bvh == NULL, "an index past its group's points: %s", hairobb_result_string(r));
+    g[1] = gr->group[1];
+    for (k = 0; k < 16; ++k) nan_points[k] = (float)k;
+    nan_points[5] = NAN;
+    past[0] = 0;
+    g[2].vertices = nan_points;
+    g[2].vertex_count = 4;
+    g[2].indices = past;
+    g[2].segment_count = 1;
+    r = hairobb_build_groups(g, 3, NULL, &bvh);
+    CHECK(r == HAIROBB_ERROR_INVALID_GEOMETRY && bvh == NULL, "a NaN in a group: %s", hairobb_result_string(r));
+    /* an empty group (no arrays) among others: built, never hit */
+    g[2].vertices = NULL;
+    g[2].indices = NULL;
+    g[2].vertex_count = 0;
+    g[2].segment_count = 0;
+    r = hairobb_build_groups(g, 3, NULL, &bvh);
+    CHECK(r == HAIROBB_OK && hairobb_group_count(bvh) == 3 && hairobb_group_segments(bvh, 2) == 0, "an empty group: %s",
+          hairobb_result_string(r));
+    hairobb_free(bvh);
+    CHECK(hairobb_build_groups(g + 2, 1, NULL, &bvh) == HAIROBB_ERROR_INVALID_ARGUMENT, "only empty groups");
+    /* every allocation failing in turn: an error, nothing leaked */
+    for (fail = 0;; ++fail) {
+        hairobb_build_options o = hairobb_default_options();
+        test_allocator_init(&a, fail);
+        o.allocator_user = &a;
+        o.threads = 1;
+        r = hairobb_build_groups(gr->group, gr->count, &o, &bvh);
+        hairobb_free(r == HAIROBB_OK ? bvh : NULL);
+        CHECK((a.failed ? r == HAIROBB_ERROR_OUT_OF_MEMORY : r == HAIROBB_OK) && a.live == 0 && a.bad_frees == 0,
+              "allocation %ld failing: %s, %ld blocks live", fail, hairobb_result_string(r), (long)a.live);
+        if (!a.failed || fail > 200) break;
+    }
+}
+
+int main(void)
+{
+    hair_scene s;
+    grouped gr;
+    size_t rays = 12000, k;
+    float *org = (float *)malloc(12 * rays), *dir = (float *)malloc(12 * rays);
+    static const size_t counts[3] = {1, 4, 16};
+    CHECK(scene_combed(&s, 40000, 5) == 0, "combed");
+    for (k = 0; k < 3; ++k) {
+        int order;
+        for (order = 0; order < 2; ++order) {
+            hairobb_build_options o = hairobb_default_options();
+            char name[96];
+            group_strands(&gr, &s, counts[k], order);
+            make_rays(&gr, &s, rays, 7 + k, org, dir);
+            snprintf(name, sizeof name, "combed 40k, %zu groups in %s order, ribbons", counts[k], order ? "space" : "groom");
+            compare_groups(name, &gr, &s, &o, org, dir, rays);
+            o.shape = HAIROBB_SHAPE_ROUND;
+            o.end_caps = HAIROBB_ON;
+            snprintf(name, sizeof name, "combed 40k, %zu groups in %s order, tubes", counts[k], order ? "space" : "groom");
+            compare_groups(name, &gr, &s, &o, org, dir, rays / 2);
+            if (counts[k] == 4 && order == 0) {
+                test_refit_group(&gr, org, dir, rays);
+                test_motion(&gr, org, dir, rays);
+                test_instances(&gr, org, dir, rays);
+                test_bad_input(&gr);
+            }
+            grouped_free(&gr);
+        }
+    }
+    scene_free(&s);
+    free(org);
+    free(dir);
+    return check_summary();
+}
