@@ -30,12 +30,12 @@ TESTS = $(QUICK) $(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_
 # (any report aborts the test), the threads test under ThreadSanitizer, and
 # the fuzzers (clang); named first, as the longest, since the tests run two
 # at a time on 2 cores
-SANITIZED = $(B)/fuzz_build_60s $(B)/asan_test_options $(B)/fuzz_hair_30s $(B)/fuzz_load_30s $(B)/asan_test_round $(B)/asan_test_unit_w8 \
+SANITIZED = $(B)/fuzz_build_45s $(B)/asan_test_options $(B)/fuzz_scene_30s $(B)/fuzz_hair_30s $(B)/fuzz_load_30s $(B)/asan_test_round $(B)/asan_test_unit_w8 \
             $(B)/asan_test_stress $(B)/tsan_test_threads $(B)/asan_test_reference $(B)/asan_test_save_w4 $(B)/asan_test_scene \
             $(B)/asan_test_groups
 ASAN      = -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 TSAN      = -O1 -g -fsanitize=thread
-# libFuzzer targets (clang): 60 s in `make test`, `make fuzz` for a long run
+# libFuzzer targets (clang): 30-45 s in `make test`, `make fuzz` for a long run
 FUZZCC    = clang
 FUZZ      = -std=c99 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -ffp-contract=off -I.
 FUZZ_SECONDS ?= 1800
@@ -150,17 +150,22 @@ $(B)/fuzz_%: tests/fuzz/fuzz_%.c tests/fuzz/fuzz_checks.h hairobb.h | $(B) deps
 	$(FUZZCC) $(FUZZ) $< -o $@ $(LIBS)
 # saved BVHs, checksum fixed up, loaded over a fixed scene (scenes.h)
 $(B)/fuzz_load: tests/scenes.h tests/random.h
+# hair, tubes, paths, filters, refit, save and load; scenes of instances
+$(B)/fuzz_build $(B)/fuzz_scene: tests/fuzz/fuzz_input.h
 # a script running fuzzer $< over corpus $(1) for $(2) seconds
 fuzz_script = @printf '\#!/bin/sh\nexec sh tests/fuzz/fuzz_run.sh $< tests/fuzz/corpus/$(1) $(2)\n' > $@ && chmod +x $@
-$(B)/fuzz_build_60s: $(B)/fuzz_build tests/fuzz/fuzz_run.sh
-	$(call fuzz_script,bvh_build,60)
+$(B)/fuzz_build_45s: $(B)/fuzz_build tests/fuzz/fuzz_run.sh
+	$(call fuzz_script,bvh_build,45)
+$(B)/fuzz_scene_30s: $(B)/fuzz_scene tests/fuzz/fuzz_run.sh
+	$(call fuzz_script,scene,30)
 $(B)/fuzz_hair_30s: $(B)/fuzz_hair tests/fuzz/fuzz_run.sh
 	$(call fuzz_script,hair_read,30)
 $(B)/fuzz_load_30s: $(B)/fuzz_load tests/fuzz/fuzz_run.sh
 	$(call fuzz_script,bvh_load,30)
 # long runs: FUZZ_SECONDS each
-fuzz: $(B)/fuzz_build $(B)/fuzz_hair $(B)/fuzz_load
+fuzz: $(B)/fuzz_build $(B)/fuzz_scene $(B)/fuzz_hair $(B)/fuzz_load
 	sh tests/fuzz/fuzz_run.sh $(B)/fuzz_build tests/fuzz/corpus/bvh_build $(FUZZ_SECONDS)
+	sh tests/fuzz/fuzz_run.sh $(B)/fuzz_scene tests/fuzz/corpus/scene $(FUZZ_SECONDS)
 	sh tests/fuzz/fuzz_run.sh $(B)/fuzz_hair tests/fuzz/corpus/hair_read $(FUZZ_SECONDS)
 	sh tests/fuzz/fuzz_run.sh $(B)/fuzz_load tests/fuzz/corpus/bvh_load $(FUZZ_SECONDS)
 
@@ -273,9 +278,9 @@ AB_BASE ?= HEAD
 ab: | $(B)
 	sh bench/ab.sh $(AB_BASE) $(AB)
 
-examples: $(B)/minimal $(B)/render $(B)/embree_swap
+examples: $(B)/minimal $(B)/render $(B)/embree_swap $(B)/groom
 
-$(B)/minimal: examples/minimal.c hairobb.h | $(B)
+$(B)/minimal $(B)/groom: $(B)/%: examples/%.c hairobb.h | $(B)
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(LIBS)
 
 # the renderer writes its PNG with stb_image_write.h (libstb-dev)
@@ -286,8 +291,8 @@ $(B)/embree_swap: examples/embree_swap.c hairobb.h | $(B) deps
 	$(CC) $(BASE) $(ARCH) $< -o $@ $(EMBREE) $(LIBS)
 
 # `make test` runs the examples too (a few seconds): minimal, a 160x160
-# render of the built-in fur, embree_swap
-$(B)/run_examples: tests/run_examples.sh $(B)/minimal $(B)/render $(B)/embree_swap
+# render of the built-in fur, embree_swap, groom
+$(B)/run_examples: tests/run_examples.sh $(B)/minimal $(B)/render $(B)/embree_swap $(B)/groom
 	@printf '#!/bin/sh\nexec sh tests/run_examples.sh $(B)\n' > $@ && chmod +x $@
 
 clean:

@@ -508,10 +508,13 @@
      excludes no group costs a ray nothing per segment. Filters see
      group_id; a secondary ray skips the segment it leaves in its own
      group only, and strands never join across groups (joints, caps).
-     The BVH keeps its own copy of the groups' arrays (the caller's may go
-     after the build; hairobb_memory_bytes counts the copy: 16 bytes a
-     point and 4 a segment more than one BVH). hairobb_refit_group moves
-     one group (its new points copied in, the tree refitted);
+     The caller's arrays may go after the build: the BVH keeps what it
+     needs (static Bezier hair with the copy, the default: its indices, 4
+     bytes a segment more than one BVH; other bases, bezier_copy OFF and
+     moving hair: its own concatenation of the groups' arrays, 16 bytes a
+     point more; hairobb_memory_bytes counts it). hairobb_refit_group
+     moves one group (its new points, the others' as traced, the tree
+     refitted);
      hairobb_refit and hairobb_refit_motion refuse a multi-group BVH, and
      hairobb_save does not take one yet (UNSUPPORTED). A multi-group BVH
      traces as one BVH over the groups' arrays concatenated in group order
@@ -5666,8 +5669,37 @@ HAIROBB_DEF hairobb_result hairobb_build_groups(const hairobb_group *groups, siz
     bvh->group_steps = scratch.group_steps;
     bvh->group_indices = scratch.group_indices;
     bvh->group_step_list = scratch.group_step_list;
+    if (bvh->copy_points && bvh->point_basis == HAIROBB_BASIS_BEZIER) {
+        /* the copy holds every segment's points: a refit gathers the
+           groups' points from it (hairobb_refit_group), so the
+           concatenation's points go, and the BVH is one BVH's size but
+           for its indices */
+        HAIROBB_FREE(bvh->group_vertices, user);
+        bvh->group_vertices = NULL;
+        bvh->vertices = NULL;
+    }
     *out = bvh;
     return HAIROBB_OK;
+}
+
+/* Refit of a static Bezier BVH whose points are only in its copy: every
+   segment's points gathered from the copy into a concatenation (a segment
+   of another group reads its own 4 points; points no segment reads stay
+   0), the group's new points over its part, and a refit from that. */
+static hairobb_result hairobb__refit_from_copy(hairobb_bvh *bvh, uint32_t group_id, const float *vertices)
+{
+    size_t bytes = 4 * sizeof(float) * bvh->vertex_count, s;
+    float *gathered = HAIROBB__CAST(float *, hairobb__malloc_large(bytes ? bytes : 16, bvh->allocator_user)), scratch[16];
+    hairobb_result result;
+    if (!gathered) return HAIROBB_ERROR_OUT_OF_MEMORY;
+    memset(gathered, 0, bytes);
+    for (s = 0; s < bvh->segment_count; ++s)
+        memcpy(gathered + 4 * (size_t)bvh->group_indices[s], hairobb__segment_points(bvh, (uint32_t)s, 0.0f, scratch), 16 * sizeof(float));
+    memcpy(gathered + 4 * bvh->vertex_first[group_id], vertices, 4 * sizeof(float) * (bvh->vertex_first[group_id + 1] - bvh->vertex_first[group_id]));
+    result = hairobb__refit_arrays(bvh, gathered, NULL);
+    bvh->vertices = NULL;   /* the copy is traced, never these */
+    HAIROBB_FREE(gathered, bvh->allocator_user);
+    return result;
 }
 
 HAIROBB_DEF hairobb_result hairobb_refit_group(hairobb_bvh *bvh, uint32_t group_id, const float *vertices, const float *tangents,
@@ -5689,6 +5721,7 @@ HAIROBB_DEF hairobb_result hairobb_refit_group(hairobb_bvh *bvh, uint32_t group_
     n = bvh->vertex_first[group_id + 1] - first;
     bytes = 4 * sizeof(float) * n;
     if (n == 0) return HAIROBB_OK;   /* a group without segments */
+    if (!steps && !bvh->group_vertices) return hairobb__refit_from_copy(bvh, group_id, vertices);
     /* copied in, the old points kept until the new ones validate */
     saved = HAIROBB__CAST(float *, HAIROBB_MALLOC(bytes * ((steps ? steps : 1u) + (tangents ? 1u : 0u)), bvh->allocator_user));
     if (!saved) return HAIROBB_ERROR_OUT_OF_MEMORY;

@@ -13,7 +13,9 @@
      one BVH        hairobb_intersect1 / _occluded1 on one BVH over every
                     segment: the baseline of every ratio
      scene of 1     that BVH as a scene's only instance: the top level's own cost
-     4, 16, 64      the groups
+     4, 16, 64      the groups, a BVH each under a scene
+     k in 1 BVH     the same k groups as one BVH (hairobb_build_groups), the
+                    groom as one tree
      16 instances   group 0 of the 16 placed 16 times, translated on a 4 x 4
                     grid in x and y, GRID_STEP of the scene's diagonal apart:
                     other hair, so its speed stands alone (no ratio)
@@ -46,7 +48,8 @@ enum {
     GROUP_SETS = 4,                       /* the scene of 1 and the three group counts */
     ROW_ONE = 0,                          /* the one BVH */
     ROW_SCENES = 1,                       /* the first of the GROUP_SETS scene rows */
-    ROW_INSTANCED = ROW_SCENES + GROUP_SETS,
+    ROW_ONE_TREE = ROW_SCENES + GROUP_SETS,   /* the three group counts as one multi-group BVH each */
+    ROW_INSTANCED = ROW_ONE_TREE + GROUP_SETS - 1,
     ROWS,
     INSTANCES = 16,                       /* of the instanced row, on a 4 x 4 grid */
     INSTANCED_FROM = ROW_SCENES + 2       /* its BVH: group 0 of the 16 groups' row */
@@ -58,6 +61,7 @@ static const int group_counts[GROUP_SETS] = {1, 4, 16, 64};
    scene's arrays, so that a hit's prim is the segment's number there. */
 typedef struct scene_accel {
     const hairobb_scene *scene;
+    const hairobb_bvh *groups;   /* a multi-group BVH's row: its hits' group_id index first_segment */
     const uint32_t *first_segment;
 } scene_accel;
 
@@ -121,6 +125,31 @@ static int scene_tracer_occluded(const void *accel, const float org[3], const fl
     hairobb_ray ray;
     group_ray(&ray, org, dir, tfar, time);
     return hairobb_scene_occluded1(((const scene_accel *)accel)->scene, NULL, NULL, &ray);
+}
+
+static int groups_tracer_intersect(const void *accel, const float org[3], const float dir[3], float tfar, float time,
+                                   hit_record *out)
+{
+    const scene_accel *a = (const scene_accel *)accel;
+    hairobb_ray ray;
+    hairobb_hit hit;
+    group_ray(&ray, org, dir, tfar, time);
+    if (!hairobb_intersect1(a->groups, &ray, &hit)) {
+        out->prim = NO_HIT;
+        return 0;
+    }
+    out->t = hit.t;
+    out->u = hit.u;
+    memcpy(out->ng, hit.Ng, sizeof out->ng);
+    out->prim = a->first_segment[hit.group_id] + hit.prim_id;
+    return 1;
+}
+
+static int groups_tracer_occluded(const void *accel, const float org[3], const float dir[3], float tfar, float time)
+{
+    hairobb_ray ray;
+    group_ray(&ray, org, dir, tfar, time);
+    return hairobb_occluded1(((const scene_accel *)accel)->groups, &ray);
 }
 
 /* ======================================================================== */
@@ -268,6 +297,73 @@ static int build_groups(const hair_scene *s, const size_t *first, size_t strands
     return 0;
 }
 
+/* The same k groups as one BVH (hairobb_build_groups): group g is the
+   scene's segments [begin, end), its vertices the range they read, its
+   indices rebased to it. */
+static int build_one_tree(const hair_scene *s, const size_t *first, size_t strands, int count, group_row *r)
+{
+    hairobb_group *groups;
+    uint32_t **rebased;
+    hairobb_build_options build_options;
+    size_t points = 4;   /* Bezier and Catmull-Rom segments read 4 points */
+    int failed = 0;
+    if ((size_t)count > strands)
+        count = (int)strands;
+    snprintf(r->label, sizeof r->label, "%d in 1 BVH", count);
+    if (row_alloc(r, count, 1) != 0)
+        return 1;
+    r->instances = 0;
+    r->owned = 1;
+    r->segments = s->segment_count;
+    groups = (hairobb_group *)calloc((size_t)count, sizeof *groups);
+    rebased = (uint32_t **)calloc((size_t)count, sizeof *rebased);
+    failed = !groups || !rebased;
+    for (int g = 0; g < count && !failed; g++) {
+        size_t begin = first[strands * (size_t)g / (size_t)count], end = first[strands * (size_t)(g + 1) / (size_t)count], i;
+        uint32_t lo = UINT32_MAX, hi = 0;
+        for (i = begin; i < end; i++) {
+            lo = s->indices[i] < lo ? s->indices[i] : lo;
+            hi = s->indices[i] > hi ? s->indices[i] : hi;
+        }
+        rebased[g] = (uint32_t *)malloc((end - begin ? end - begin : 1) * sizeof(uint32_t));
+        if (!rebased[g]) {
+            failed = 1;
+            break;
+        }
+        for (i = begin; i < end; i++)
+            rebased[g][i - begin] = s->indices[i] - lo;
+        groups[g].vertices = s->vertices + 4 * (size_t)lo;
+        groups[g].vertex_count = end > begin ? (size_t)(hi - lo) + points : 0;
+        groups[g].indices = rebased[g];
+        groups[g].segment_count = end - begin;
+        r->first_segment[g] = (uint32_t)begin;
+    }
+    memset(&build_options, 0, sizeof build_options);
+    build_options.basis = s->basis == SCENE_BASIS_CATMULL_ROM ? HAIROBB_BASIS_CATMULL_ROM : HAIROBB_BASIS_BEZIER;
+    build_options.allocator_user = &hairobb_meter;
+    if (!failed) {
+        progress_start("  %s: build", r->label);
+        double start = scene_now();
+        hairobb_result result = hairobb_build_groups(groups, (size_t)count, &build_options, &r->bvh[0]);
+        r->build_seconds = scene_now() - start;
+        failed = result != HAIROBB_OK;
+        progress("%s %.3f s", failed ? hairobb_result_string(result) : "done", r->build_seconds);
+    }
+    for (int g = 0; rebased && g < count; g++)
+        free(rebased[g]);
+    free(rebased);
+    free(groups);
+    if (failed)
+        return 1;
+    r->bvh_bytes = hairobb_memory_bytes(r->bvh[0]);
+    r->accel.groups = r->bvh[0];
+    r->accel.first_segment = r->first_segment;
+    r->tracer.accel = &r->accel;
+    r->tracer.intersect = groups_tracer_intersect;
+    r->tracer.occluded = groups_tracer_occluded;
+    return 0;
+}
+
 /* ======================================================================== */
 /* Hits against the one BVH's, and timing in rounds                         */
 /* ======================================================================== */
@@ -373,8 +469,9 @@ static void print_rows(const options *o, const hair_scene *s, const scene_layout
            rays[RAYS_PRIMARY].count ? 100.0 * (double)primary_hits / (double)rays[RAYS_PRIMARY].count : 0.0,
            rays[RAYS_INCOHERENT].count, rays[RAYS_SHADOW].count);
     printf("rows: the one BVH (hairobb_intersect1/_occluded1); it alone under a scene; the strands in array order split "
-           "into\nk groups, a BVH each (default options, all cores), identity maps; group 0 of the 16 placed %d times, "
-           "translated\non a 4x4 grid %.2f of the scene's diagonal apart (other hair: speed alone)\n",
+           "into\nk groups, a BVH each (default options, all cores), identity maps; the same k groups as one BVH "
+           "(hairobb_build_groups:\n\"k in 1 BVH\"); group 0 of the 16 placed %d times, "
+           "translated on a 4x4 grid %.2f of the scene's\ndiagonal apart (other hair: speed alone)\n",
            INSTANCES, GRID_STEP);
 
     printf("\nbuild and memory (build: the BVHs' builds, one each, and the scene's; bytes: hairobb_memory_bytes of "
@@ -475,8 +572,8 @@ static int run_group_scene(const options *given, int index, int order)
         printf("\n=== groups: %s skipped: %s\n", o.scenes[index], loaded < 0 ? why : "could not be loaded");
         return loaded > 0;
     }
-    /* the one BVH and the three rows of groups each hold the whole hair */
-    if (!memory_fits((1.0 + GROUP_SETS) * HAIROBB_WITH_COPY_BYTES_PER_SEGMENT * (double)s.segment_count, "the BVHs",
+    /* the one BVH and the six rows of groups each hold the whole hair */
+    if (!memory_fits((2.0 * GROUP_SETS) * HAIROBB_WITH_COPY_BYTES_PER_SEGMENT * (double)s.segment_count, "the BVHs",
                      why_not, sizeof why_not)) {
         printf("\n=== groups: %s skipped: %s\n", s.name, why_not);
         scene_free(&s);
@@ -529,6 +626,16 @@ static int run_group_scene(const options *given, int index, int order)
         failed = row_scene(r, NULL);
         if (!failed) {
             r->boxes_per_ray = boxes_per_ray(r, NULL, &rays[RAYS_PRIMARY]);
+            r->measured = 1;
+        }
+    }
+
+    /* the groups as one BVH each */
+    for (int set = 1; set < GROUP_SETS && !failed; set++) {
+        group_row *r = &rows[ROW_ONE_TREE + set - 1];
+        failed = build_one_tree(&s, first, strands, group_counts[set], r);
+        if (!failed) {
+            r->boxes_per_ray = one->boxes_per_ray;
             r->measured = 1;
         }
     }

@@ -1,7 +1,7 @@
 #!/bin/sh
 # Runs the examples cheaply (a few seconds): minimal, the renderer on its
-# built-in fur at 160x160 (ribbons, then round curves), embree_swap on its
-# built-in patch. Each must exit
+# built-in fur at 160x160 (ribbons, then round curves), groom (three hair
+# groups in one BVH), embree_swap on its built-in patch. Each must exit
 # 0; the render must hit more than 5% of its pixels and write a PNG that is
 # not one flat colour (a flat 160x160 PNG compresses to well under 1 KB).
 # Usage: sh tests/run_examples.sh [build dir]. Closing line "N passed, M failed".
@@ -33,6 +33,10 @@ pct=$(tr '\r' '\n' < "$B/render_round.log" | sed -n 's/.*, \([0-9.]*\)% of pixel
 echo "render_round.png (round curves): ${pct:-?}% of pixels hit"
 check "render --round exits 0" $rc
 [ -n "$pct" ] && awk "BEGIN { exit !($pct > 5) }"; check "render --round hits > 5% of pixels" $?
+
+out=$("$B/groom" 2>&1); rc=$?
+printf '%s\n' "$out"
+check "groom: three groups in one BVH, each seen, before and after one moves" $rc
 
 out=$("$B/embree_swap" 2>&1); rc=$?
 printf '%s\n' "$out"

@@ -264,8 +264,9 @@ static void compare_groups(const char *name, const grouped *gr, const hair_scene
 }
 
 /* hairobb_refit_group against a one BVH built over the moved hair. */
-static void test_refit_group(const grouped *gr_in, const float *org, const float *dir, size_t rays)
+static void test_refit_group(const grouped *gr_in, const float *org, const float *dir, size_t rays, hairobb_switch copy)
 {
+    hairobb_build_options o = hairobb_default_options();
     grouped gr = *gr_in;   /* shallow: group 1's vertices replaced below */
     hairobb_bvh *groups = NULL, *one = NULL;
     size_t n = gr.group[1].vertex_count, i, differ = 0, hits = 0;
@@ -277,8 +278,9 @@ static void test_refit_group(const grouped *gr_in, const float *org, const float
     memcpy(all + 4 * vbase, moved, 16 * n);
     memcpy(bad, moved, 16 * n);
     bad[4 * (n / 2)] = NAN;
-    CHECK(hairobb_build_groups(gr.group, gr.count, NULL, &groups) == HAIROBB_OK, "refit: builds");
-    CHECK(hairobb_build(all, gr.all_vertex_count, gr.all_indices, gr.all_segment_count, NULL, &one) == HAIROBB_OK, "refit: one BVH");
+    o.bezier_copy = copy;   /* with the copy, the others' points are gathered from it */
+    CHECK(hairobb_build_groups(gr.group, gr.count, &o, &groups) == HAIROBB_OK, "refit: builds");
+    CHECK(hairobb_build(all, gr.all_vertex_count, gr.all_indices, gr.all_segment_count, &o, &one) == HAIROBB_OK, "refit: one BVH");
     if (!groups || !one) return;
     r = hairobb_refit_group(groups, 1, bad, NULL, NULL);
     CHECK(r == HAIROBB_ERROR_INVALID_GEOMETRY, "refit_group with a NaN: %s", hairobb_result_string(r));
@@ -308,8 +310,9 @@ static void test_refit_group(const grouped *gr_in, const float *org, const float
         CHECK(hairobb_save_size(groups) == 0 && hairobb_save(groups, &byte, 1) == HAIROBB_ERROR_UNSUPPORTED,
               "a multi-group BVH's save is refused");
     }
-    printf("refit_group (group 1 of %zu moved, after a refused refit): %zu rays, %zu hits, %zu differ from one BVH built moved\n",
-           gr.count, rays, hits, differ);
+    printf("refit_group (group 1 of %zu moved, after a refused refit; copy %s): %zu rays, %zu hits, %zu differ from one BVH built "
+           "moved; memory %zu bytes (one BVH %zu)\n", gr.count, copy == HAIROBB_OFF ? "off" : "on", rays, hits, differ,
+           hairobb_memory_bytes(groups), hairobb_memory_bytes(one));
     CHECK(differ == 0 && hits > rays / 4, "refit_group: %zu differ, %zu hits", differ, hits);
     hairobb_free(groups);
     hairobb_free(one);
@@ -487,7 +490,8 @@ int main(void)
             snprintf(name, sizeof name, "combed 40k, %zu groups in %s order, tubes", counts[k], order ? "space" : "groom");
             compare_groups(name, &gr, &s, &o, org, dir, rays / 2);
             if (counts[k] == 4 && order == 0) {
-                test_refit_group(&gr, org, dir, rays);
+                test_refit_group(&gr, org, dir, rays, HAIROBB_AUTO);
+                test_refit_group(&gr, org, dir, rays, HAIROBB_OFF);
                 test_motion(&gr, org, dir, rays);
                 test_instances(&gr, org, dir, rays);
                 test_bad_input(&gr);
