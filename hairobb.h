@@ -82,6 +82,7 @@
      Several hair groups (SCENES)
        hairobb_build_groups     one BVH over several groups' arrays (masks, user pointers; hit.group_id)
        hairobb_refit_group      new positions of one group of such a BVH
+       hairobb_load_groups      such a BVH from saved bytes, over the same groups
        hairobb_group_count      its group count (1 for hairobb_build's BVHs)
        hairobb_group_user       a group's user pointer
        hairobb_group_segments   a group's segment count
@@ -515,8 +516,9 @@
      point more; hairobb_memory_bytes counts it). hairobb_refit_group
      moves one group (its new points, the others' as traced, the tree
      refitted);
-     hairobb_refit and hairobb_refit_motion refuse a multi-group BVH, and
-     hairobb_save does not take one yet (UNSUPPORTED). A multi-group BVH
+     hairobb_refit and hairobb_refit_motion refuse a multi-group BVH.
+     hairobb_save takes one; hairobb_load_groups loads it over the same
+     groups (SAVE AND LOAD). A multi-group BVH
      traces as one BVH over the groups' arrays concatenated in group order
      does, hit for hit (tests/test_groups.c).
      INSTANCES: a groom is often placed more than once. hairobb_scene_build(instances, count,
@@ -594,8 +596,11 @@
      segments traced), the node memory, the leaves' segment ids (and the u
      ranges of segments spatial splits clipped, 8 bytes each, where there
      are some) and a 64-bit checksum of all of it, in this host's byte
-     order. hairobb_save writes format HAIROBB_SAVE_FORMAT_VERSION (2 in
-     0.2.0); hairobb_load reads it and the older formats down to
+     order; a multi-group BVH's bytes add its groups' sizes (first segment
+     and first vertex of each) before the checksum, and load with
+     hairobb_load_groups over the same groups. hairobb_save writes format
+     HAIROBB_SAVE_FORMAT_VERSION (3 from 0.3.0, which added the groups; 2
+     in 0.2.0); hairobb_load reads it and the older formats down to
      HAIROBB_SAVE_FORMAT_OLDEST (1: 0.1.x's, whose hash covered Bezier
      input's whole arrays, vertex_count points and the indices). It is for
      builds of this library with the same node width: a newer format
@@ -724,7 +729,7 @@
 #define HAIROBB_VERSION (HAIROBB_VERSION_MAJOR * 10000 + HAIROBB_VERSION_MINOR * 100 + HAIROBB_VERSION_PATCH)
 /* The format hairobb_save writes (SAVE AND LOAD); hairobb_load reads it
    and every format from HAIROBB_SAVE_FORMAT_OLDEST on. */
-#define HAIROBB_SAVE_FORMAT_VERSION 2
+#define HAIROBB_SAVE_FORMAT_VERSION 3
 #define HAIROBB_SAVE_FORMAT_OLDEST 1
 
 #if defined(HAIROBB_STATIC) && (defined(__GNUC__) || defined(__clang__))
@@ -962,11 +967,10 @@ HAIROBB_DEF const char *hairobb_simd_string(hairobb_simd simd);
 HAIROBB_DEF void hairobb_bounds(const hairobb_bvh *bvh, float lower[3], float upper[3]);
 
 /* Saving and loading a built BVH (SAVE AND LOAD in the manual).
-   hairobb_save_size: the bytes hairobb_save writes (0 for NULL, and for a
-   multi-group BVH). hairobb_save: writes them into buffer;
-   HAIROBB_ERROR_INVALID_ARGUMENT (nothing written) if size is smaller or a
-   pointer NULL; HAIROBB_ERROR_UNSUPPORTED for a multi-group BVH
-   (hairobb_build_groups), which the format does not hold yet. */
+   hairobb_save_size: the bytes hairobb_save writes (0 for NULL).
+   hairobb_save: writes them into buffer; HAIROBB_ERROR_INVALID_ARGUMENT
+   (nothing written) if size is smaller or a pointer NULL. A multi-group
+   BVH's bytes hold its groups' sizes; they load with hairobb_load_groups. */
 HAIROBB_DEF size_t hairobb_save_size(const hairobb_bvh *bvh);
 HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, size_t size);
 /* A BVH from the size bytes hairobb_save wrote (nothing of buffer is kept),
@@ -985,6 +989,13 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
                                         const float *vertices, size_t vertex_count,
                                         const uint32_t *indices, size_t segment_count,
                                         const hairobb_build_options *options, hairobb_bvh **out);
+/* A multi-group BVH from the bytes hairobb_save wrote, over the same
+   groups (hairobb_build_groups' arguments; masks and users may be new).
+   Groups of other sizes: HAIROBB_ERROR_MISMATCH, as is a multi-group BVH's
+   bytes given to hairobb_load; a one-group BVH's bytes load here as one
+   group. Otherwise as hairobb_load. */
+HAIROBB_DEF hairobb_result hairobb_load_groups(const void *buffer, size_t size, const hairobb_group *groups, size_t group_count,
+                                               const hairobb_build_options *options, hairobb_bvh **out);
 #ifndef HAIROBB_NO_STDIO
 /* The same through a file (HAIROBB_ERROR_IO if it cannot be opened, read or
    written); each holds the whole file in memory once while it runs. */
@@ -5593,92 +5604,111 @@ static hairobb_result hairobb__check_groups(const hairobb_group *groups, size_t 
     return *segment_total ? HAIROBB_OK : HAIROBB_ERROR_INVALID_ARGUMENT;
 }
 
-HAIROBB_DEF hairobb_result hairobb_build_groups(const hairobb_group *groups, size_t group_count,
-                                                const hairobb_build_options *options, hairobb_bvh **out)
+/* The groups checked and concatenated into scratch's arrays (a BVH
+   struct that holds only them, freed with hairobb__free_groups on an
+   error), opt's tangents and steps pointed at the concatenation's. */
+static hairobb_result hairobb__take_groups(const hairobb_group *groups, size_t group_count, hairobb_build_options *opt,
+                                           hairobb_bvh *scratch)
 {
-    hairobb_build_options opt = options ? *options : hairobb_default_options();
-    hairobb_bvh scratch, *bvh = &scratch;   /* the groups' arrays, moved into the BVH once it is built */
     hairobb_result result;
     size_t vertex_total, segment_total, g, i, points_bytes;
-    unsigned k, steps = opt.time_steps >= 2 ? opt.time_steps : 0u;
-    void *user = opt.allocator_user;
-    if (out) *out = NULL;
-    /* the rest of the options as hairobb_build judges them, below */
-    if (!out || (unsigned)opt.basis > HAIROBB_BASIS_LINEAR || opt.time_steps > HAIROBB__MAX_TIME_STEPS) return HAIROBB_ERROR_INVALID_ARGUMENT;
-    result = hairobb__check_groups(groups, group_count, &opt, &vertex_total, &segment_total);
+    unsigned k, steps = opt->time_steps >= 2 ? opt->time_steps : 0u;
+    void *user = opt->allocator_user;
+    /* the rest of the options as hairobb_build and hairobb_load judge them */
+    if ((unsigned)opt->basis > HAIROBB_BASIS_LINEAR || opt->time_steps > HAIROBB__MAX_TIME_STEPS) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    result = hairobb__check_groups(groups, group_count, opt, &vertex_total, &segment_total);
     if (result != HAIROBB_OK) return result;
     if (vertex_total > (size_t)-1 / (4 * sizeof(float)) / (steps + 2)) return HAIROBB_ERROR_TOO_LARGE;
     points_bytes = 4 * sizeof(float) * vertex_total;
-    memset(&scratch, 0, sizeof scratch);
-    scratch.allocator_user = user;
-    scratch.group_count = (uint32_t)group_count;
-    scratch.vertex_count = vertex_total;
-    scratch.time_steps = steps;
-    scratch.group_first = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC((group_count + 1) * sizeof(uint32_t), user));
-    scratch.group_mask = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(group_count * sizeof(uint32_t), user));
-    scratch.vertex_first = HAIROBB__CAST(size_t *, HAIROBB_MALLOC((group_count + 1) * sizeof(size_t), user));
-    scratch.group_user = HAIROBB__CAST(void **, HAIROBB_MALLOC(group_count * sizeof(void *), user));
-    scratch.group_indices = HAIROBB__CAST(uint32_t *, hairobb__malloc_large(segment_total * sizeof(uint32_t), user));
-    if (!steps) scratch.group_vertices = HAIROBB__CAST(float *, hairobb__malloc_large(points_bytes ? points_bytes : 16, user));
-    if (opt.basis == HAIROBB_BASIS_HERMITE)
-        scratch.group_tangents = HAIROBB__CAST(float *, hairobb__malloc_large(points_bytes ? points_bytes : 16, user));
+    memset(scratch, 0, sizeof *scratch);
+    scratch->allocator_user = user;
+    scratch->group_count = (uint32_t)group_count;
+    scratch->vertex_count = vertex_total;
+    scratch->segment_count = segment_total;
+    scratch->time_steps = steps;
+    scratch->group_first = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC((group_count + 1) * sizeof(uint32_t), user));
+    scratch->group_mask = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(group_count * sizeof(uint32_t), user));
+    scratch->vertex_first = HAIROBB__CAST(size_t *, HAIROBB_MALLOC((group_count + 1) * sizeof(size_t), user));
+    scratch->group_user = HAIROBB__CAST(void **, HAIROBB_MALLOC(group_count * sizeof(void *), user));
+    scratch->group_indices = HAIROBB__CAST(uint32_t *, hairobb__malloc_large(segment_total * sizeof(uint32_t), user));
+    if (!steps) scratch->group_vertices = HAIROBB__CAST(float *, hairobb__malloc_large(points_bytes ? points_bytes : 16, user));
+    if (opt->basis == HAIROBB_BASIS_HERMITE)
+        scratch->group_tangents = HAIROBB__CAST(float *, hairobb__malloc_large(points_bytes ? points_bytes : 16, user));
     if (steps) {
-        scratch.group_steps = HAIROBB__CAST(float *, hairobb__malloc_large(steps * points_bytes, user));
-        scratch.group_step_list = HAIROBB__CAST(const float **, HAIROBB_MALLOC(steps * sizeof(float *), user));
+        scratch->group_steps = HAIROBB__CAST(float *, hairobb__malloc_large(steps * points_bytes, user));
+        scratch->group_step_list = HAIROBB__CAST(const float **, HAIROBB_MALLOC(steps * sizeof(float *), user));
     }
-    if (!scratch.group_first || !scratch.group_mask || !scratch.vertex_first || !scratch.group_user || !scratch.group_indices ||
-        (!steps && !scratch.group_vertices) || (opt.basis == HAIROBB_BASIS_HERMITE && !scratch.group_tangents) ||
-        (steps && (!scratch.group_steps || !scratch.group_step_list))) {
-        hairobb__free_groups(&scratch);
+    if (!scratch->group_first || !scratch->group_mask || !scratch->vertex_first || !scratch->group_user || !scratch->group_indices ||
+        (!steps && !scratch->group_vertices) || (opt->basis == HAIROBB_BASIS_HERMITE && !scratch->group_tangents) ||
+        (steps && (!scratch->group_steps || !scratch->group_step_list))) {
+        hairobb__free_groups(scratch);
         return HAIROBB_ERROR_OUT_OF_MEMORY;
     }
-    scratch.group_first[0] = 0;
-    scratch.vertex_first[0] = 0;
-    scratch.group_mask_and = 0xffffffffu;
+    scratch->group_first[0] = 0;
+    scratch->vertex_first[0] = 0;
+    scratch->group_mask_and = 0xffffffffu;
     for (g = 0; g < group_count; ++g) {
         const hairobb_group *group = &groups[g];
-        size_t n = group->segment_count ? group->vertex_count : 0, first = scratch.vertex_first[g];
-        uint32_t base = scratch.group_first[g];
-        scratch.vertex_first[g + 1] = first + n;
-        scratch.group_first[g + 1] = base + (uint32_t)group->segment_count;
-        scratch.group_mask[g] = group->mask ? group->mask : 0xffffffffu;
-        scratch.group_mask_and &= scratch.group_mask[g];
-        scratch.group_user[g] = group->user;
-        for (i = 0; i < group->segment_count; ++i) scratch.group_indices[base + i] = group->indices[i] + (uint32_t)first;
+        size_t n = group->segment_count ? group->vertex_count : 0, first = scratch->vertex_first[g];
+        uint32_t base = scratch->group_first[g];
+        scratch->vertex_first[g + 1] = first + n;
+        scratch->group_first[g + 1] = base + (uint32_t)group->segment_count;
+        scratch->group_mask[g] = group->mask ? group->mask : 0xffffffffu;
+        scratch->group_mask_and &= scratch->group_mask[g];
+        scratch->group_user[g] = group->user;
+        for (i = 0; i < group->segment_count; ++i) scratch->group_indices[base + i] = group->indices[i] + (uint32_t)first;
         if (!n) continue;
-        if (!steps) memcpy(hairobb__group_points(&scratch, (uint32_t)g, -1), group->vertices, 4 * sizeof(float) * n);
-        if (scratch.group_tangents) memcpy(scratch.group_tangents + 4 * first, group->tangents, 4 * sizeof(float) * n);
-        for (k = 0; k < steps; ++k) memcpy(hairobb__group_points(&scratch, (uint32_t)g, (int)k), group->time_vertices[k], 4 * sizeof(float) * n);
+        if (!steps) memcpy(hairobb__group_points(scratch, (uint32_t)g, -1), group->vertices, 4 * sizeof(float) * n);
+        if (scratch->group_tangents) memcpy(scratch->group_tangents + 4 * first, group->tangents, 4 * sizeof(float) * n);
+        for (k = 0; k < steps; ++k) memcpy(hairobb__group_points(scratch, (uint32_t)g, (int)k), group->time_vertices[k], 4 * sizeof(float) * n);
     }
-    for (k = 0; k < steps; ++k) scratch.group_step_list[k] = scratch.group_steps + 4 * vertex_total * (size_t)k;
-    opt.tangents = scratch.group_tangents;
-    opt.time_vertices = steps ? scratch.group_step_list : NULL;
-    result = hairobb_build(scratch.group_vertices, vertex_total, scratch.group_indices, segment_total, &opt, &bvh);
-    if (result != HAIROBB_OK) {
-        hairobb__free_groups(&scratch);
-        return result;
-    }
-    bvh->group_count = scratch.group_count;
-    bvh->group_first = scratch.group_first;
-    bvh->group_mask = scratch.group_mask;
-    bvh->vertex_first = scratch.vertex_first;
-    bvh->group_user = scratch.group_user;
-    bvh->group_mask_and = scratch.group_mask_and;
-    bvh->group_vertices = scratch.group_vertices;
-    bvh->group_tangents = scratch.group_tangents;
-    bvh->group_steps = scratch.group_steps;
-    bvh->group_indices = scratch.group_indices;
-    bvh->group_step_list = scratch.group_step_list;
+    for (k = 0; k < steps; ++k) scratch->group_step_list[k] = scratch->group_steps + 4 * vertex_total * (size_t)k;
+    opt->tangents = scratch->group_tangents;
+    opt->time_vertices = steps ? scratch->group_step_list : NULL;
+    return HAIROBB_OK;
+}
+
+/* scratch's arrays moved into the BVH built or loaded over them. */
+static void hairobb__attach_groups(hairobb_bvh *bvh, const hairobb_bvh *scratch)
+{
+    bvh->group_count = scratch->group_count;
+    bvh->group_first = scratch->group_first;
+    bvh->group_mask = scratch->group_mask;
+    bvh->vertex_first = scratch->vertex_first;
+    bvh->group_user = scratch->group_user;
+    bvh->group_mask_and = scratch->group_mask_and;
+    bvh->group_vertices = scratch->group_vertices;
+    bvh->group_tangents = scratch->group_tangents;
+    bvh->group_steps = scratch->group_steps;
+    bvh->group_indices = scratch->group_indices;
+    bvh->group_step_list = scratch->group_step_list;
     if (bvh->copy_points && bvh->point_basis == HAIROBB_BASIS_BEZIER) {
         /* the copy holds every segment's points: a refit gathers the
            groups' points from it (hairobb_refit_group), so the
            concatenation's points go, and the BVH is one BVH's size but
            for its indices */
-        HAIROBB_FREE(bvh->group_vertices, user);
+        HAIROBB_FREE(bvh->group_vertices, bvh->allocator_user);
         bvh->group_vertices = NULL;
         bvh->vertices = NULL;
     }
-    *out = bvh;
+}
+
+HAIROBB_DEF hairobb_result hairobb_build_groups(const hairobb_group *groups, size_t group_count,
+                                                const hairobb_build_options *options, hairobb_bvh **out)
+{
+    hairobb_build_options opt = options ? *options : hairobb_default_options();
+    hairobb_bvh scratch;   /* the groups' arrays, moved into the BVH once it is built */
+    hairobb_result result;
+    if (out) *out = NULL;
+    if (!out) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    result = hairobb__take_groups(groups, group_count, &opt, &scratch);
+    if (result != HAIROBB_OK) return result;
+    result = hairobb_build(scratch.group_vertices, scratch.vertex_count, scratch.group_indices, scratch.segment_count, &opt, out);
+    if (result != HAIROBB_OK) {
+        hairobb__free_groups(&scratch);
+        return result;
+    }
+    hairobb__attach_groups(*out, &scratch);
     return HAIROBB_OK;
 }
 
@@ -5769,6 +5799,9 @@ HAIROBB_DEF size_t hairobb_group_segments(const hairobb_bvh *bvh, uint32_t group
      leaf_prims, 4 bytes each, then zeros to a multiple of 8;
      where flags has HAIROBB__SAVE_RANGES (a spatial-split tree that clipped
      segments), leaf_ranges: u0, u1 of each leaf_prims entry, 8 bytes each;
+     where flags has HAIROBB__SAVE_GROUPS (a multi-group BVH, format 3 on):
+     the group count G (8 bytes), each group's first segment (G + 1 of 4
+     bytes, then zeros to a multiple of 8) and first vertex (G + 1 of 8);
      a checksum of every byte before it (hairobb__hash), 8 bytes.
    The hair hash (hairobb__traced_hash) covers the Bezier segments the BVH
    traces, read from the BVH's own copy where it has one, so that a
@@ -5782,6 +5815,7 @@ HAIROBB_DEF size_t hairobb_group_segments(const hairobb_bvh *bvh, uint32_t group
 #define HAIROBB__SAVE_BYTE_ORDER 0x01020304u
 #define HAIROBB__SAVE_HEADER 128
 #define HAIROBB__SAVE_RANGES 1u         /* leaf_ranges follow leaf_prims */
+#define HAIROBB__SAVE_GROUPS 2u         /* the groups' section follows (format 3 on) */
 #define HAIROBB__AT_VERSION 8           /* uint32 each ... */
 #define HAIROBB__AT_BYTE_ORDER 12
 #define HAIROBB__AT_WIDTH 16
@@ -5791,7 +5825,7 @@ HAIROBB_DEF size_t hairobb_group_segments(const hairobb_bvh *bvh, uint32_t group
 #define HAIROBB__AT_LAYOUT 32
 #define HAIROBB__AT_MAX_LEAF 36
 #define HAIROBB__AT_POLICY 40
-#define HAIROBB__AT_FLAGS 44            /* HAIROBB__SAVE_RANGES or 0 */
+#define HAIROBB__AT_FLAGS 44            /* HAIROBB__SAVE_RANGES, HAIROBB__SAVE_GROUPS or 0 */
 #define HAIROBB__AT_SEGMENTS 48         /* ... uint64 each ... */
 #define HAIROBB__AT_VERTICES 56
 #define HAIROBB__AT_HAIR_HASH 64
@@ -5923,11 +5957,18 @@ static uint64_t hairobb__get64(const unsigned char *at) { uint64_t v; memcpy(&v,
 /* leaf_prims' bytes in the format: a multiple of 8 */
 static size_t hairobb__saved_leaf_bytes(size_t leaf_prim_count) { return (sizeof(uint32_t) * leaf_prim_count + 7) & ~(size_t)7; }
 
+/* the groups' section's bytes, for G groups */
+static size_t hairobb__saved_group_bytes(uint64_t groups)
+{
+    return (size_t)(8 + (((groups + 1) * sizeof(uint32_t) + 7) & ~(uint64_t)7) + 8 * (groups + 1));
+}
+
 HAIROBB_DEF size_t hairobb_save_size(const hairobb_bvh *bvh)
 {
-    if (!bvh || bvh->group_first) return 0;
+    if (!bvh) return 0;
     return HAIROBB__SAVE_HEADER + bvh->node_bytes + hairobb__saved_leaf_bytes(bvh->leaf_prim_count) +
-           (bvh->leaf_ranges ? 2 * sizeof(float) * bvh->leaf_prim_count : 0) + 8;
+           (bvh->leaf_ranges ? 2 * sizeof(float) * bvh->leaf_prim_count : 0) +
+           (bvh->group_first ? hairobb__saved_group_bytes(bvh->group_count) : 0) + 8;
 }
 
 HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, size_t size)
@@ -5935,7 +5976,6 @@ HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, si
     unsigned char *out = HAIROBB__CAST(unsigned char *, buffer);
     size_t total = hairobb_save_size(bvh), leaf_bytes;
     int k;
-    if (bvh && bvh->group_first) return HAIROBB_ERROR_UNSUPPORTED;
     if (!bvh || !out || size < total) return HAIROBB_ERROR_INVALID_ARGUMENT;
     memset(out, 0, HAIROBB__SAVE_HEADER);
     memcpy(out, hairobb__save_magic, sizeof hairobb__save_magic);
@@ -5948,7 +5988,8 @@ HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, si
     hairobb__put32(out + HAIROBB__AT_LAYOUT, (uint32_t)bvh->obb_layout);
     hairobb__put32(out + HAIROBB__AT_MAX_LEAF, bvh->max_leaf_size);
     hairobb__put32(out + HAIROBB__AT_POLICY, (uint32_t)bvh->policy);
-    hairobb__put32(out + HAIROBB__AT_FLAGS, bvh->leaf_ranges ? HAIROBB__SAVE_RANGES : 0u);
+    hairobb__put32(out + HAIROBB__AT_FLAGS,
+                   (bvh->leaf_ranges ? HAIROBB__SAVE_RANGES : 0u) | (bvh->group_first ? HAIROBB__SAVE_GROUPS : 0u));
     hairobb__put64(out + HAIROBB__AT_SEGMENTS, bvh->segment_count);
     hairobb__put64(out + HAIROBB__AT_VERTICES, hairobb__traced_vertex_count(bvh));
     hairobb__put64(out + HAIROBB__AT_HAIR_HASH, hairobb__traced_hash(bvh, HAIROBB__SAVE_VERSION));
@@ -5972,6 +6013,17 @@ HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, si
     if (bvh->leaf_ranges) {
         memcpy(out, bvh->leaf_ranges, 2 * sizeof(float) * bvh->leaf_prim_count);
         out += 2 * sizeof(float) * bvh->leaf_prim_count;
+    }
+    if (bvh->group_first) {
+        size_t first_bytes = (((size_t)bvh->group_count + 1) * sizeof(uint32_t) + 7) & ~(size_t)7;
+        uint32_t g;
+        hairobb__put64(out, bvh->group_count);
+        memset(out + 8, 0, first_bytes);
+        for (g = 0; g <= bvh->group_count; ++g) {
+            hairobb__put32(out + 8 + 4 * (size_t)g, bvh->group_first[g]);
+            hairobb__put64(out + 8 + first_bytes + 8 * (size_t)g, bvh->vertex_first[g]);
+        }
+        out += hairobb__saved_group_bytes(bvh->group_count);
     }
     hairobb__put64(out, hairobb__save_checksum(HAIROBB__CAST(unsigned char *, buffer), total));
     return HAIROBB_OK;
@@ -6052,6 +6104,8 @@ static unsigned hairobb__layout_types(hairobb_obb_layout layout, hairobb_node_po
 typedef struct hairobb__saved {
     uint64_t node_bytes, leaf_prim_count, segments;
     size_t leaf_bytes, range_bytes;
+    uint64_t groups;                  /* a multi-group BVH's group count, its section at group_at; 0: none */
+    size_t group_at;
     uint32_t version, basis, steps;
     hairobb__tree_settings tree;      /* set once the header's words are in range */
 } hairobb__saved;
@@ -6078,11 +6132,22 @@ static hairobb_result hairobb__read_saved(const unsigned char *in, size_t size, 
     saved->leaf_bytes = hairobb__saved_leaf_bytes((size_t)saved->leaf_prim_count);
     flags = hairobb__get32(in + HAIROBB__AT_FLAGS);
     /* no overflow: below size */
-    saved->range_bytes = flags == HAIROBB__SAVE_RANGES ? 2 * sizeof(float) * (size_t)saved->leaf_prim_count : 0;
-    if (flags > HAIROBB__SAVE_RANGES ||
-        saved->leaf_bytes + saved->range_bytes != size - HAIROBB__SAVE_HEADER - 8 - (size_t)saved->node_bytes ||
-        hairobb__get64(in + size - 8) != hairobb__save_checksum(in, size))
+    saved->range_bytes = flags & HAIROBB__SAVE_RANGES ? 2 * sizeof(float) * (size_t)saved->leaf_prim_count : 0;
+    saved->groups = 0;
+    if (flags > (saved->version >= 3u ? HAIROBB__SAVE_RANGES | HAIROBB__SAVE_GROUPS : HAIROBB__SAVE_RANGES) ||
+        saved->leaf_bytes + saved->range_bytes > size - HAIROBB__SAVE_HEADER - 8 - (size_t)saved->node_bytes)
         return HAIROBB_ERROR_INVALID_FILE;
+    saved->group_at = HAIROBB__SAVE_HEADER + (size_t)saved->node_bytes + saved->leaf_bytes + saved->range_bytes;
+    if (flags & HAIROBB__SAVE_GROUPS) {   /* its count first, then its size must add up too */
+        if (size - 8 - saved->group_at < 8) return HAIROBB_ERROR_INVALID_FILE;
+        saved->groups = hairobb__get64(in + saved->group_at);
+        if (saved->groups == 0 || saved->groups > (size - 8 - saved->group_at) / 12 ||
+            hairobb__saved_group_bytes(saved->groups) != size - 8 - saved->group_at)
+            return HAIROBB_ERROR_INVALID_FILE;
+    } else if (saved->group_at != size - 8) {
+        return HAIROBB_ERROR_INVALID_FILE;
+    }
+    if (hairobb__get64(in + size - 8) != hairobb__save_checksum(in, size)) return HAIROBB_ERROR_INVALID_FILE;
     saved->basis = hairobb__get32(in + HAIROBB__AT_BASIS);
     precision = hairobb__get32(in + HAIROBB__AT_PRECISION);
     pieces = hairobb__get32(in + HAIROBB__AT_PIECES);
@@ -6186,10 +6251,11 @@ done:
     return result;
 }
 
-HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
-                                        const float *vertices, size_t vertex_count,
-                                        const uint32_t *indices, size_t segment_count,
-                                        const hairobb_build_options *options, hairobb_bvh **out)
+/* hairobb_load, and hairobb_load_groups over the groups' concatenation
+   (groups: 1; the saved groups' count and section left in *saved) */
+static hairobb_result hairobb__load(const void *buffer, size_t size, const float *vertices, size_t vertex_count, const uint32_t *indices,
+                                    size_t segment_count, const hairobb_build_options *options, int groups, hairobb__saved *saved_out,
+                                    hairobb_bvh **out)
 {
     const unsigned char *in = HAIROBB__CAST(const unsigned char *, buffer);
     hairobb_build_options opt;
@@ -6208,8 +6274,9 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
     if (result == HAIROBB_OK) result = hairobb__choose_simd(opt.simd, &simd);
     if (result == HAIROBB_OK) result = hairobb__read_saved(in, size, &saved);
     if (result == HAIROBB_OK && (saved.basis != (uint32_t)opt.basis || saved.segments != (uint64_t)segment_count ||
-                                 saved.steps != (opt.time_steps < 2 ? 0u : opt.time_steps)))
+                                 saved.steps != (opt.time_steps < 2 ? 0u : opt.time_steps) || (saved.groups && !groups)))
         result = HAIROBB_ERROR_MISMATCH;
+    *saved_out = saved;
     if (result == HAIROBB_OK) result = hairobb__validate_hair(&opt, &vertices, vertex_count, indices, segment_count, &steps);
     if (result != HAIROBB_OK) return result;
 
@@ -6242,6 +6309,47 @@ HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size,
 failed:
     hairobb_free(bvh);
     return result;
+}
+
+HAIROBB_DEF hairobb_result hairobb_load(const void *buffer, size_t size, const float *vertices, size_t vertex_count,
+                                        const uint32_t *indices, size_t segment_count, const hairobb_build_options *options,
+                                        hairobb_bvh **out)
+{
+    hairobb__saved saved;
+    return hairobb__load(buffer, size, vertices, vertex_count, indices, segment_count, options, 0, &saved, out);
+}
+
+HAIROBB_DEF hairobb_result hairobb_load_groups(const void *buffer, size_t size, const hairobb_group *groups, size_t group_count,
+                                               const hairobb_build_options *options, hairobb_bvh **out)
+{
+    hairobb_build_options opt = options ? *options : hairobb_default_options();
+    hairobb_bvh scratch;
+    hairobb__saved saved;
+    hairobb_result result;
+    if (out) *out = NULL;
+    if (!out || !buffer) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    result = hairobb__take_groups(groups, group_count, &opt, &scratch);
+    if (result != HAIROBB_OK) return result;
+    memset(&saved, 0, sizeof saved);
+    result = hairobb__load(buffer, size, scratch.group_vertices, scratch.vertex_count, scratch.group_indices, scratch.segment_count, &opt,
+                           1, &saved, out);
+    if (result == HAIROBB_OK) {   /* the saved groups' sizes: a one-group file is one group */
+        const unsigned char *in = HAIROBB__CAST(const unsigned char *, buffer) + saved.group_at;
+        size_t first_bytes = (((size_t)saved.groups + 1) * sizeof(uint32_t) + 7) & ~(size_t)7, g;
+        if (saved.groups ? saved.groups != (uint64_t)group_count : group_count != 1) result = HAIROBB_ERROR_MISMATCH;
+        for (g = 0; result == HAIROBB_OK && saved.groups && g <= group_count; ++g)
+            if (hairobb__get32(in + 8 + 4 * g) != scratch.group_first[g] ||
+                hairobb__get64(in + 8 + first_bytes + 8 * g) != (uint64_t)scratch.vertex_first[g])
+                result = HAIROBB_ERROR_MISMATCH;
+    }
+    if (result != HAIROBB_OK) {
+        hairobb_free(*out);
+        *out = NULL;
+        hairobb__free_groups(&scratch);
+        return result;
+    }
+    hairobb__attach_groups(*out, &scratch);
+    return HAIROBB_OK;
 }
 
 #ifndef HAIROBB_NO_STDIO

@@ -305,11 +305,6 @@ static void test_refit_group(const grouped *gr_in, const float *org, const float
         hits += (size_t)got_a;
         differ += !same_hit(got_a, &a, got_b, &b);
     }
-    {   /* not in the saved format yet: refused, not written wrong */
-        unsigned char byte = 0;
-        CHECK(hairobb_save_size(groups) == 0 && hairobb_save(groups, &byte, 1) == HAIROBB_ERROR_UNSUPPORTED,
-              "a multi-group BVH's save is refused");
-    }
     printf("refit_group (group 1 of %zu moved, after a refused refit; copy %s): %zu rays, %zu hits, %zu differ from one BVH built "
            "moved; memory %zu bytes (one BVH %zu)\n", gr.count, copy == HAIROBB_OFF ? "off" : "on", rays, hits, differ,
            hairobb_memory_bytes(groups), hairobb_memory_bytes(one));
@@ -370,6 +365,71 @@ static void test_motion(const grouped *gr, const float *org, const float *dir, s
     hairobb_free(one);
     for (g = 0; g < gr->count; ++g) free(later[g]);
     free(all_later);
+}
+
+/* Saved and loaded (hairobb_load_groups): the same hits bit for bit;
+   hairobb_load refuses the groups' bytes, other group sizes are refused,
+   a one-group BVH's bytes load as one group. */
+static void test_save_load(const grouped *gr, const float *org, const float *dir, size_t rays)
+{
+    hairobb_bvh *groups = NULL, *loaded = NULL, *other = NULL;
+    hairobb_group shifted[MAX_GROUPS];
+    size_t size, i, differ = 0, hits = 0;
+    unsigned char *bytes;
+    hairobb_result r;
+    CHECK(hairobb_build_groups(gr->group, gr->count, NULL, &groups) == HAIROBB_OK, "save: builds");
+    if (!groups) return;
+    size = hairobb_save_size(groups);
+    bytes = (unsigned char *)malloc(size);
+    CHECK(bytes && hairobb_save(groups, bytes, size) == HAIROBB_OK, "save: saved (%zu bytes)", size);
+    r = hairobb_load_groups(bytes, size, gr->group, gr->count, NULL, &loaded);
+    CHECK(r == HAIROBB_OK && hairobb_group_count(loaded) == gr->count, "load_groups: %s", hairobb_result_string(r));
+    r = hairobb_load(bytes, size, gr->all_vertices, gr->all_vertex_count, gr->all_indices, gr->all_segment_count, NULL, &other);
+    CHECK(r == HAIROBB_ERROR_MISMATCH && !other, "hairobb_load of a multi-group BVH's bytes: %s", hairobb_result_string(r));
+    memcpy(shifted, gr->group, gr->count * sizeof shifted[0]);
+    shifted[0].segment_count -= 8;   /* a strand fewer in group 0: the same total count elsewhere would differ too */
+    r = hairobb_load_groups(bytes, size, shifted, gr->count, NULL, &other);
+    CHECK(r == HAIROBB_ERROR_MISMATCH && !other, "load_groups over other groups: %s", hairobb_result_string(r));
+    r = hairobb_load_groups(bytes, size, gr->group, gr->count - 1, NULL, &other);
+    CHECK(r == HAIROBB_ERROR_MISMATCH && !other, "load_groups over fewer groups: %s", hairobb_result_string(r));
+    for (i = 0; loaded && i < rays; ++i) {
+        hairobb_ray ray;
+        hairobb_hit a, b;
+        int got_a, got_b;
+        memcpy(ray.org, org + 3 * i, sizeof ray.org);
+        memcpy(ray.dir, dir + 3 * i, sizeof ray.dir);
+        ray.tnear = 0.0f;
+        ray.tfar = INFINITY;
+        ray.time = 0.0f;
+        got_a = hairobb_intersect1(groups, &ray, &a);
+        got_b = hairobb_intersect1(loaded, &ray, &b);
+        hits += (size_t)got_a;
+        differ += !same_hit(got_a, &a, got_b, &b);
+    }
+    printf("save and load of %zu groups (%zu bytes): %zu rays, %zu hits, %zu differ\n", gr->count, size, rays, hits, differ);
+    CHECK(differ == 0 && hits > rays / 4, "save and load: %zu differ", differ);
+    hairobb_free(loaded);
+    hairobb_free(groups);
+    free(bytes);
+    {   /* a one-group BVH's bytes, loaded as one group */
+        hairobb_bvh *one = NULL;
+        hairobb_group all;
+        memset(&all, 0, sizeof all);
+        all.vertices = gr->all_vertices;
+        all.vertex_count = gr->all_vertex_count;
+        all.indices = gr->all_indices;
+        all.segment_count = gr->all_segment_count;
+        CHECK(hairobb_build(all.vertices, all.vertex_count, all.indices, all.segment_count, NULL, &one) == HAIROBB_OK, "one BVH");
+        size = hairobb_save_size(one);
+        bytes = (unsigned char *)malloc(size);
+        CHECK(hairobb_save(one, bytes, size) == HAIROBB_OK, "one BVH saved");
+        r = hairobb_load_groups(bytes, size, &all, 1, NULL, &loaded);
+        CHECK(r == HAIROBB_OK && hairobb_group_count(loaded) == 1, "a one-group BVH's bytes through load_groups: %s",
+              hairobb_result_string(r));
+        hairobb_free(loaded);
+        hairobb_free(one);
+        free(bytes);
+    }
 }
 
 /* A scene placing a multi-group BVH twice (identity, and moved): its hits
@@ -494,6 +554,7 @@ int main(void)
                 test_refit_group(&gr, org, dir, rays, HAIROBB_OFF);
                 test_motion(&gr, org, dir, rays);
                 test_instances(&gr, org, dir, rays);
+                test_save_load(&gr, org, dir, rays);
                 test_bad_input(&gr);
             }
             grouped_free(&gr);

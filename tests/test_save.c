@@ -515,13 +515,18 @@ static void bad_bytes(void)
           "%zu of %zu truncations (or one byte more) load or give another error than INVALID_FILE", bad_cuts, h.size);
 
     /* every bit of every byte flipped: version, byte order and width are
-       UNSUPPORTED, everything else the checksum's INVALID_FILE */
+       UNSUPPORTED (but a version flipped to an older one this build reads,
+       whose checksum then fails), everything else the checksum's
+       INVALID_FILE */
     for (byte = 0; byte < h.size; ++byte)
         for (bit = 0; bit < 8; ++bit) {
             hairobb_result want = byte >= HAIROBB__AT_VERSION && byte < HAIROBB__AT_WIDTH + 4 ? HAIROBB_ERROR_UNSUPPORTED
                                                                                                : HAIROBB_ERROR_INVALID_FILE;
             memcpy(copy, h.blob, h.size);
             copy[byte] ^= (unsigned char)(1u << bit);
+            if (byte >= HAIROBB__AT_VERSION && byte < HAIROBB__AT_VERSION + 4 && hairobb__get32(copy + HAIROBB__AT_VERSION) >= HAIROBB__SAVE_VERSION_OLDEST &&
+                hairobb__get32(copy + HAIROBB__AT_VERSION) <= HAIROBB__SAVE_VERSION)
+                want = HAIROBB_ERROR_INVALID_FILE;
             r = load_small(&h, copy, h.size);
             ++flips;
             if (want == HAIROBB_ERROR_UNSUPPORTED) ++header_flips;
