@@ -599,7 +599,7 @@
      order; a multi-group BVH's bytes add its groups' sizes (first segment
      and first vertex of each) before the checksum, and load with
      hairobb_load_groups over the same groups. hairobb_save writes format
-     HAIROBB_SAVE_FORMAT_VERSION (3 from 0.3.0, which added the groups; 2
+     HAIROBB_SAVE_FORMAT_VERSION (3 since the groups, after 0.2.0; 2
      in 0.2.0); hairobb_load reads it and the older formats down to
      HAIROBB_SAVE_FORMAT_OLDEST (1: 0.1.x's, whose hash covered Bezier
      input's whole arrays, vertex_count points and the indices). It is for
