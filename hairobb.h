@@ -90,6 +90,9 @@
        hairobb_scene_update     new maps, masks, users or BVHs for the same instances
        hairobb_scene_free       frees a scene (not its BVHs; NULL is ignored)
        hairobb_scene_user       an instance's user pointer
+       hairobb_scene_count      its instance count
+       hairobb_scene_bounds     the world bounds of its instances
+       hairobb_scene_memory_bytes  the bytes it allocated (not its BVHs')
        hairobb_scene_intersect1 the nearest hit over every instance, hit->instance_id which
        hairobb_scene_occluded1  whether any instance is hit
      Move the hair
@@ -544,7 +547,8 @@
      its own instance only, so a ray reaches the same strand placed
      elsewhere. `hit` may be `from`.
      Moving: hairobb_scene_update(scene, instances, count) takes new maps,
-     masks, users or BVHs (refit or rebuilt ones) for the same count and
+     masks, users or BVHs (refit or rebuilt ones), as many as wanted
+     (instances added or removed: the ids are the new array's), and
      rebuilds the top level (a binary tree over the instances' world boxes,
      quick next to any BVH's refit). Refit a BVH, then update the scenes
      that place it: a scene keeps the boxes it was given. A bad instance
@@ -1068,10 +1072,16 @@ typedef struct hairobb_instance {
 
 HAIROBB_DEF hairobb_result hairobb_scene_build(const hairobb_instance *instances, size_t count, void *allocator_user,
                                                hairobb_scene **out);
-/* new transforms, masks, users or BVHs (refit or rebuilt) for the same count */
+/* new instances: maps, masks, users or BVHs (refit or rebuilt), and as
+   many as wanted (instances added or removed; ids are the new array's) */
 HAIROBB_DEF hairobb_result hairobb_scene_update(hairobb_scene *scene, const hairobb_instance *instances, size_t count);
 HAIROBB_DEF void hairobb_scene_free(hairobb_scene *scene);
 HAIROBB_DEF void *hairobb_scene_user(const hairobb_scene *scene, uint32_t instance_id);
+/* The instance count; the world bounds of every instance's box (lower >
+   upper for no instance); the bytes the scene allocated (not its BVHs'). */
+HAIROBB_DEF size_t hairobb_scene_count(const hairobb_scene *scene);
+HAIROBB_DEF void hairobb_scene_bounds(const hairobb_scene *scene, float lower[3], float upper[3]);
+HAIROBB_DEF size_t hairobb_scene_memory_bytes(const hairobb_scene *scene);
 /* as hairobb_intersect1_context / hairobb_occluded1_context over every
    instance; hit->instance_id says which (context, from may be NULL) */
 HAIROBB_DEF int hairobb_scene_intersect1(const hairobb_scene *scene, const hairobb_context *context, const hairobb_hit *from,
@@ -9104,8 +9114,41 @@ HAIROBB_DEF hairobb_result hairobb_scene_build(const hairobb_instance *instances
 
 HAIROBB_DEF hairobb_result hairobb_scene_update(hairobb_scene *scene, const hairobb_instance *instances, size_t count)
 {
-    if (!scene || (count && !instances) || count != scene->count) return HAIROBB_ERROR_INVALID_ARGUMENT;
-    return hairobb__scene_fill(scene, instances);   /* checks every instance before it changes any */
+    hairobb_scene *fresh, old;
+    hairobb_result result;
+    if (!scene || (count && !instances)) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    if (count == scene->count) return hairobb__scene_fill(scene, instances);   /* checks every instance before it changes any */
+    /* another count: a scene built anew takes this one's place (on an
+       error this one is as it was) */
+    result = hairobb_scene_build(instances, count, scene->allocator_user, &fresh);
+    if (result != HAIROBB_OK) return result;
+    old = *scene;
+    *scene = *fresh;
+    *fresh = old;
+    hairobb_scene_free(fresh);
+    return HAIROBB_OK;
+}
+
+HAIROBB_DEF size_t hairobb_scene_count(const hairobb_scene *scene)
+{
+    return scene ? scene->count : 0;
+}
+
+HAIROBB_DEF void hairobb_scene_bounds(const hairobb_scene *scene, float lower[3], float upper[3])
+{
+    int k;
+    if (!lower || !upper) return;
+    for (k = 0; k < 3; ++k) {
+        lower[k] = scene && scene->count ? scene->nodes[0].lower[k] : INFINITY;
+        upper[k] = scene && scene->count ? scene->nodes[0].upper[k] : -INFINITY;
+    }
+}
+
+HAIROBB_DEF size_t hairobb_scene_memory_bytes(const hairobb_scene *scene)
+{
+    if (!scene) return 0;
+    return sizeof *scene + scene->count * (sizeof *scene->placed + sizeof *scene->order) +
+           (scene->count ? (2 * scene->count - 1) * sizeof *scene->nodes : 0);
 }
 
 HAIROBB_DEF void *hairobb_scene_user(const hairobb_scene *scene, uint32_t instance_id)

@@ -375,13 +375,33 @@ int main(void)
         CHECK(hairobb_scene_update(scene, inst, 5) == HAIROBB_OK, "update: moved");
         flatten(&f, inst, groups, 5, 0xffffffffu);
         compare("instance 1 moved (update)", scene, NULL, &f, 0, 10000, 31);
-        /* bad updates: another count, a NaN, a singular map, no BVH: refused, the scene as it was */
+        /* another count: instance 4 removed, then added back (the
+           reference over the first 4, then all 5 again); bounds and memory */
+        {
+            float lo5[3], hi5[3], lo4[3], hi4[3];
+            size_t bytes5 = hairobb_scene_memory_bytes(scene);
+            flat_hair four;
+            hairobb_scene_bounds(scene, lo5, hi5);
+            CHECK(hairobb_scene_update(scene, inst, 4) == HAIROBB_OK && hairobb_scene_count(scene) == 4, "update: an instance removed");
+            hairobb_scene_bounds(scene, lo4, hi4);
+            CHECK(hairobb_scene_memory_bytes(scene) < bytes5 && lo4[0] >= lo5[0] && hi4[0] <= hi5[0] && lo4[1] >= lo5[1] &&
+                      hi4[1] <= hi5[1] && lo4[2] >= lo5[2] && hi4[2] <= hi5[2],
+                  "a scene of 4 is smaller and inside the 5's bounds");
+            flatten(&four, inst, groups, 4, 0xffffffffu);
+            compare("instance 4 removed (update to 4)", scene, NULL, &four, 0, 4000, 35);
+            flat_free(&four);
+            CHECK(hairobb_scene_update(scene, inst, 5) == HAIROBB_OK && hairobb_scene_count(scene) == 5 &&
+                      hairobb_scene_memory_bytes(scene) == bytes5, "update: added back");
+        }
+        /* bad updates: a NaN, a singular map, no BVH (with the same count
+           and another): refused, the scene as it was */
         {
             hairobb_instance bad[MAX_INSTANCES];
             memcpy(bad, inst, sizeof bad);
-            CHECK(hairobb_scene_update(scene, inst, 4) == HAIROBB_ERROR_INVALID_ARGUMENT, "update: another count");
             bad[3].transform[5] = NAN;
-            CHECK(hairobb_scene_update(scene, bad, 5) == HAIROBB_ERROR_INVALID_ARGUMENT, "update: NaN");
+            CHECK(hairobb_scene_update(scene, bad, 5) == HAIROBB_ERROR_INVALID_ARGUMENT &&
+                      hairobb_scene_update(scene, bad, 4) == HAIROBB_ERROR_INVALID_ARGUMENT && hairobb_scene_count(scene) == 5,
+                  "update: NaN");
             memcpy(bad, inst, sizeof bad);
             memset(bad[3].transform, 0, 8 * sizeof(float));   /* rows 0 and 1 zero */
             CHECK(hairobb_scene_update(scene, bad, 5) == HAIROBB_ERROR_INVALID_ARGUMENT, "update: singular");
