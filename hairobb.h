@@ -113,6 +113,8 @@
        hairobb_memory_bytes     every byte the BVH allocated
        hairobb_get_stats        node and leaf counts, depth, bytes, SAH cost now and as built
        hairobb_bounds           the bounds of all ribbons, radius included
+       hairobb_interpolate      position, radius and derivatives at a hit's (group, prim, u)
+       hairobb_basis_weights    the control points' weights at u: the caller's own per-vertex data
        hairobb_get_simd         the instruction set the BVH traces with (SIMD PATHS)
        hairobb_simd_string      its name
        hairobb_result_string    the name of a result code (ERRORS)
@@ -247,6 +249,13 @@
      across the fibre in [-1, 1] that hair BSDFs take (h in the
      Marschner and d'Eon models; its sign follows cross(P', X - P) along
      dir), equal at a circle's entry and exit.
+     Attributes at a hit: hairobb_interpolate(bvh, hit.group_id,
+     hit.prim_id, hit.u, ray time, p, d1, d2) gives the curve's point and
+     radius and their first and second derivatives in u there (ray
+     differentials, a shading frame); hairobb_basis_weights(basis, u, w,
+     dw) the weights of the segment's control points, so that per-vertex
+     data of the caller's (colours, texture coordinates) interpolates as
+     the curve does: sum_k w[k] data[indices[prim] + k].
      (Embree's flat curves report v in [-1, 1] too, and the tangent as Ng.)
      Every hit with t in [tnear, tfar] counts, including the ribbon a
      secondary ray starts on. Trace secondary rays with
@@ -969,6 +978,20 @@ HAIROBB_DEF const char *hairobb_simd_string(hairobb_simd simd);
 
 /* Bounds of all ribbons, radius included. */
 HAIROBB_DEF void hairobb_bounds(const hairobb_bvh *bvh, float lower[3], float upper[3]);
+/* The curve at a hit (rtcInterpolate's job, HITS): position and radius
+   (x, y, z, r) and their first and second derivatives in u, of segment
+   prim_id of group group_id (0 for hairobb_build's BVHs) at u, at `time`
+   for moving hair (else ignored), as traced. Any of p, d1, d2 may be NULL;
+   0 for ids out of range or a time outside [0, 1] of moving hair. */
+HAIROBB_DEF int hairobb_interpolate(const hairobb_bvh *bvh, uint32_t group_id, uint32_t prim_id, float u, float time, float p[4],
+                                    float d1[4], float d2[4]);
+/* The weights at u of a segment's control points in basis, and of their
+   derivatives (dw may be NULL): the caller's own per-vertex data a
+   (colour, a texture coordinate) at a hit is sum_k w[k] a[i + k], i the
+   segment's index (indices[prim_id] of its group), k < 4 (Bezier,
+   B-spline, Catmull-Rom) or 2 (linear: w[2] = w[3] = 0). Hermite: w[0],
+   w[1] weigh the two points, w[2], w[3] their tangents. */
+HAIROBB_DEF void hairobb_basis_weights(hairobb_basis basis, float u, float w[4], float dw[4]);
 
 /* Saving and loading a built BVH (SAVE AND LOAD in the manual).
    hairobb_save_size: the bytes hairobb_save writes (0 for NULL).
@@ -5195,6 +5218,62 @@ HAIROBB_DEF void hairobb_get_stats(const hairobb_bvh *bvh, hairobb_stats *stats)
     /* from the boxes, when asked: the build does not pay for it */
     stats->sah_cost = hairobb__sah_cost(bvh);
     stats->build_sah_cost = bvh->refitted ? bvh->build_sah_cost : stats->sah_cost;
+}
+
+HAIROBB_DEF void hairobb_basis_weights(hairobb_basis basis, float u, float w[4], float dw[4])
+{
+    float s = 1.0f - u, u2 = u * u, u3 = u2 * u, a[4] = {0, 0, 0, 0}, d[4] = {0, 0, 0, 0};
+    switch (basis) {
+    case HAIROBB_BASIS_BSPLINE:
+        a[0] = s * s * s / 6.0f; a[1] = (3.0f * u3 - 6.0f * u2 + 4.0f) / 6.0f;
+        a[2] = (-3.0f * u3 + 3.0f * u2 + 3.0f * u + 1.0f) / 6.0f; a[3] = u3 / 6.0f;
+        d[0] = -0.5f * s * s; d[1] = 1.5f * u2 - 2.0f * u; d[2] = -1.5f * u2 + u + 0.5f; d[3] = 0.5f * u2;
+        break;
+    case HAIROBB_BASIS_CATMULL_ROM:
+        a[0] = 0.5f * (-u3 + 2.0f * u2 - u); a[1] = 0.5f * (3.0f * u3 - 5.0f * u2 + 2.0f);
+        a[2] = 0.5f * (-3.0f * u3 + 4.0f * u2 + u); a[3] = 0.5f * (u3 - u2);
+        d[0] = 0.5f * (-3.0f * u2 + 4.0f * u - 1.0f); d[1] = 0.5f * (9.0f * u2 - 10.0f * u);
+        d[2] = 0.5f * (-9.0f * u2 + 8.0f * u + 1.0f); d[3] = 0.5f * (3.0f * u2 - 2.0f * u);
+        break;
+    case HAIROBB_BASIS_HERMITE:
+        a[0] = 2.0f * u3 - 3.0f * u2 + 1.0f; a[1] = -2.0f * u3 + 3.0f * u2; a[2] = u3 - 2.0f * u2 + u; a[3] = u3 - u2;
+        d[0] = 6.0f * u2 - 6.0f * u; d[1] = -6.0f * u2 + 6.0f * u; d[2] = 3.0f * u2 - 4.0f * u + 1.0f; d[3] = 3.0f * u2 - 2.0f * u;
+        break;
+    case HAIROBB_BASIS_LINEAR:
+        a[0] = s; a[1] = u; d[0] = -1.0f; d[1] = 1.0f;
+        break;
+    default:   /* Bezier */
+        a[0] = s * s * s; a[1] = 3.0f * u * s * s; a[2] = 3.0f * u2 * s; a[3] = u3;
+        d[0] = -3.0f * s * s; d[1] = 3.0f * s * s - 6.0f * u * s; d[2] = 6.0f * u * s - 3.0f * u2; d[3] = 3.0f * u2;
+        break;
+    }
+    if (w) memcpy(w, a, sizeof a);
+    if (dw) memcpy(dw, d, sizeof d);
+}
+
+HAIROBB_DEF int hairobb_interpolate(const hairobb_bvh *bvh, uint32_t group_id, uint32_t prim_id, float u, float time, float p[4],
+                                    float d1[4], float d2[4])
+{
+    float scratch[16], w[4], dw[4], s = 1.0f - u;
+    const float *cp;
+    size_t prim = prim_id;
+    int k;
+    if (!bvh) return 0;
+    if (bvh->group_first) {
+        if (group_id >= bvh->group_count || prim_id >= bvh->group_first[group_id + 1] - bvh->group_first[group_id]) return 0;
+        prim += bvh->group_first[group_id];
+    } else if (group_id != 0) {
+        return 0;
+    }
+    if (prim >= bvh->segment_count || (bvh->time_steps && !(time >= 0.0f && time <= 1.0f))) return 0;
+    cp = hairobb__segment_points(bvh, (uint32_t)prim, time, scratch);   /* the Bezier points traced */
+    hairobb_basis_weights(HAIROBB_BASIS_BEZIER, u, w, dw);
+    for (k = 0; k < 4; ++k) {
+        if (p) p[k] = w[0] * cp[k] + w[1] * cp[4 + k] + w[2] * cp[8 + k] + w[3] * cp[12 + k];
+        if (d1) d1[k] = dw[0] * cp[k] + dw[1] * cp[4 + k] + dw[2] * cp[8 + k] + dw[3] * cp[12 + k];
+        if (d2) d2[k] = 6.0f * (s * (cp[8 + k] - 2.0f * cp[4 + k] + cp[k]) + u * (cp[12 + k] - 2.0f * cp[8 + k] + cp[4 + k]));
+    }
+    return 1;
 }
 
 HAIROBB_DEF void hairobb_bounds(const hairobb_bvh *bvh, float lower[3], float upper[3])

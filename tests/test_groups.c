@@ -432,6 +432,105 @@ static void test_save_load(const grouped *gr, const float *org, const float *dir
     }
 }
 
+/* hairobb_interpolate at hits: the tangent is the hit's, the point within
+   r of the hit's (ribbons: across the ray at the hit's depth; tubes: on
+   the tube); hairobb_basis_weights on the caller's points, in every
+   basis, gives hairobb_interpolate's point and tangent. */
+static void test_interpolate(const grouped *gr, const float *org, const float *dir, size_t rays)
+{
+    static const hairobb_basis bases[5] = {HAIROBB_BASIS_BEZIER, HAIROBB_BASIS_BSPLINE, HAIROBB_BASIS_CATMULL_ROM, HAIROBB_BASIS_HERMITE,
+                                           HAIROBB_BASIS_LINEAR};
+    hairobb_bvh *groups = NULL;
+    size_t i, hits = 0, bad = 0, weights_bad = 0, tried = 0;
+    int shape, b;
+    for (shape = 0; shape < 2; ++shape) {
+        hairobb_build_options o = hairobb_default_options();
+        o.shape = shape ? HAIROBB_SHAPE_ROUND : HAIROBB_SHAPE_RIBBON;
+        CHECK(hairobb_build_groups(gr->group, gr->count, &o, &groups) == HAIROBB_OK, "interpolate: builds");
+        for (i = 0; groups && i < rays; ++i) {
+            hairobb_ray ray;
+            hairobb_hit hit;
+            float p[4], d1[4], d2[4], X[3];
+            double off = 0.0, along = 0.0, t2 = 0.0, dd = 0.0, tangent_error = 0.0, length;
+            int k;
+            memcpy(ray.org, org + 3 * i, sizeof ray.org);
+            memcpy(ray.dir, dir + 3 * i, sizeof ray.dir);
+            ray.tnear = 0.0f;
+            ray.tfar = INFINITY;
+            ray.time = 0.0f;
+            if (!hairobb_intersect1(groups, &ray, &hit)) continue;
+            ++hits;
+            if (!hairobb_interpolate(groups, hit.group_id, hit.prim_id, hit.u, 0.0f, p, d1, d2)) {
+                ++bad;
+                continue;
+            }
+            for (k = 0; k < 3; ++k) {
+                X[k] = ray.org[k] + hit.t * ray.dir[k];
+                tangent_error += fabs((double)d1[k] - hit.tangent[k]);
+                t2 += (double)hit.tangent[k] * hit.tangent[k];
+                dd += (double)ray.dir[k] * ray.dir[k];
+            }
+            length = sqrt(dd);
+            for (k = 0; k < 3; ++k) along += ((double)X[k] - p[k]) * ray.dir[k] / length;
+            for (k = 0; k < 3; ++k) {
+                double across = (double)X[k] - p[k] - (shape ? 0.0 : along * ray.dir[k] / length);
+                off += across * across;
+            }
+            off = sqrt(off);
+            /* a ribbon's point lies across the ray within r of the hit's; a tube's at r */
+            bad += tangent_error > 1e-5 * sqrt(t2) + 1e-6 || !(shape ? fabs(off - p[3]) <= 2e-3 * p[3] + 1e-5 : off <= 1.002 * p[3] + 1e-5);
+        }
+        hairobb_free(groups);
+        groups = NULL;
+    }
+    /* every basis: the weights on the caller's points (group 0's) against the curve as traced */
+    for (b = 0; b < 5; ++b) {
+        const hairobb_group *g0 = &gr->group[0];
+        size_t points = bases[b] == HAIROBB_BASIS_HERMITE || bases[b] == HAIROBB_BASIS_LINEAR ? 2 : 4, n = g0->vertex_count - points + 1;
+        uint32_t *idx = (uint32_t *)malloc(sizeof(uint32_t) * n);
+        float *tangents = (float *)malloc(16 * g0->vertex_count);
+        hairobb_group one = *g0;
+        hairobb_build_options o = hairobb_default_options();
+        for (i = 0; i < n; ++i) idx[i] = (uint32_t)i;
+        for (i = 0; i < 4 * g0->vertex_count; ++i) tangents[i] = (i & 3) == 3 ? 0.0f : 0.1f * (float)((i * 7) % 5) - 0.2f;
+        one.indices = idx;
+        one.segment_count = n;
+        one.tangents = bases[b] == HAIROBB_BASIS_HERMITE ? tangents : NULL;
+        o.basis = bases[b];
+        CHECK(hairobb_build_groups(&one, 1, &o, &groups) == HAIROBB_OK, "basis %d: builds", b);
+        for (i = 0; groups && i < 2000; ++i) {
+            uint32_t prim = (uint32_t)((i * 2654435761u) % n);
+            float u = (float)(i % 17) / 16.0f, w[4], dw[4], p[4], d1[4], want[4] = {0, 0, 0, 0}, want_d[4] = {0, 0, 0, 0};
+            const float *v = g0->vertices + 4 * (size_t)prim, *t = tangents + 4 * (size_t)prim;
+            int k, j;
+            hairobb_basis_weights(bases[b], u, w, dw);
+            for (k = 0; k < 4; ++k)
+                for (j = 0; j < 4; ++j) {
+                    /* Hermite: w[2], w[3] weigh the tangents; linear: two points */
+                    float a = bases[b] == HAIROBB_BASIS_HERMITE ? (j < 2 ? v[4 * j + k] : t[4 * (j - 2) + k])
+                                                                 : (j < (int)points ? v[4 * j + k] : 0.0f);
+                    want[k] += w[j] * a;
+                    want_d[k] += dw[j] * a;
+                }
+            ++tried;
+            if (!hairobb_interpolate(groups, 0, prim, u, 0.0f, p, d1, NULL)) {
+                ++weights_bad;
+                continue;
+            }
+            for (k = 0; k < 4; ++k)
+                weights_bad += fabsf(p[k] - want[k]) > 1e-5f * (1.0f + fabsf(want[k])) || fabsf(d1[k] - want_d[k]) > 1e-4f * (1.0f + fabsf(want_d[k]));
+        }
+        hairobb_free(groups);
+        groups = NULL;
+        free(idx);
+        free(tangents);
+    }
+    printf("interpolate: %zu hits (ribbons and tubes), %zu off the hit; basis weights on the caller's points, 5 bases: %zu of %zu "
+           "differ from the curve as traced\n", hits, bad, weights_bad, tried);
+    CHECK(hits > rays / 4 && bad == 0 && weights_bad == 0, "interpolate: %zu bad of %zu hits, %zu weights", bad, hits, weights_bad);
+    CHECK(!hairobb_interpolate(NULL, 0, 0, 0.5f, 0.0f, NULL, NULL, NULL), "interpolate: NULL");
+}
+
 /* A scene placing a multi-group BVH twice (identity, and moved): its hits
    in the first instance are the BVH's own, with instance_id. */
 static void test_instances(const grouped *gr, const float *org, const float *dir, size_t rays)
@@ -555,6 +654,7 @@ int main(void)
                 test_motion(&gr, org, dir, rays);
                 test_instances(&gr, org, dir, rays);
                 test_save_load(&gr, org, dir, rays);
+                test_interpolate(&gr, org, dir, rays);
                 test_bad_input(&gr);
             }
             grouped_free(&gr);
