@@ -16,6 +16,10 @@
      4, 16, 64      the groups, a BVH each under a scene
      k in 1 BVH     the same k groups as one BVH (hairobb_build_groups), the
                     groom as one tree
+     Embree k geom  Embree's flat Bezier curves as k geometries of one scene
+                    (one tree over all of them; k = 1: all the hair in one);
+                    the table of pairs gives k in 1 BVH / Embree k geometries
+                    within each round
      16 instances   group 0 of the 16 placed 16 times, translated on a 4 x 4
                     grid in x and y, GRID_STEP of the scene's diagonal apart:
                     other hair, so its speed stands alone (no ratio)
@@ -49,7 +53,8 @@ enum {
     ROW_ONE = 0,                          /* the one BVH */
     ROW_SCENES = 1,                       /* the first of the GROUP_SETS scene rows */
     ROW_ONE_TREE = ROW_SCENES + GROUP_SETS,   /* the three group counts as one multi-group BVH each */
-    ROW_INSTANCED = ROW_ONE_TREE + GROUP_SETS - 1,
+    ROW_EMBREE = ROW_ONE_TREE + GROUP_SETS - 1,   /* Embree: the hair as 1, 4, 16, 64 curve geometries of one scene */
+    ROW_INSTANCED = ROW_EMBREE + GROUP_SETS,
     ROWS,
     INSTANCES = 16,                       /* of the instanced row, on a 4 x 4 grid */
     INSTANCED_FROM = ROW_SCENES + 2       /* its BVH: group 0 of the 16 groups' row */
@@ -62,6 +67,7 @@ static const int group_counts[GROUP_SETS] = {1, 4, 16, 64};
 typedef struct scene_accel {
     const hairobb_scene *scene;
     const hairobb_bvh *groups;   /* a multi-group BVH's row: its hits' group_id index first_segment */
+    const emb_scene *embree;     /* an Embree row: its hits' geometry ids index first_segment */
     const uint32_t *first_segment;
 } scene_accel;
 
@@ -83,6 +89,10 @@ typedef struct group_row {
     double boxes_per_ray;       /* instance boxes a primary ray crosses, mean */
     int measured;
     spread mrays[RAY_KIND_COUNT][MAX_THREAD_COUNTS], ratio[RAY_KIND_COUNT][MAX_THREAD_COUNTS];
+    spread pair[RAY_KIND_COUNT][MAX_THREAD_COUNTS];   /* k in 1 BVH rows: / Embree's k geometries, within rounds */
+    emb_scene *embree;
+    uint32_t **embree_indices;  /* an Embree row's index buffers, one a geometry */
+    size_t *embree_counts;
     /* against the one BVH, every ray of each set */
     int checked[RAY_KIND_COUNT];
     size_t hit_miss[RAY_KIND_COUNT], other_segment[RAY_KIND_COUNT], tie[RAY_KIND_COUNT], t_differs[RAY_KIND_COUNT];
@@ -145,6 +155,26 @@ static int groups_tracer_intersect(const void *accel, const float org[3], const 
     return 1;
 }
 
+static int embree_groups_intersect(const void *accel, const float org[3], const float dir[3], float tfar, float time,
+                                   hit_record *out)
+{
+    const scene_accel *a = (const scene_accel *)accel;
+    uint32_t geometry, prim;
+    (void)time;
+    if (!emb_intersect_group(a->embree, org, dir, tfar, &out->t, &out->u, &geometry, &prim)) {
+        out->prim = NO_HIT;
+        return 0;
+    }
+    out->ng[0] = out->ng[1] = out->ng[2] = 0.0f;
+    out->prim = a->first_segment[geometry] + prim;
+    return 1;
+}
+
+static int embree_groups_occluded(const void *accel, const float org[3], const float dir[3], float tfar, float time)
+{
+    return emb_occluded_at_time(((const scene_accel *)accel)->embree, org, 0.0f, dir, tfar, time);
+}
+
 static int groups_tracer_occluded(const void *accel, const float org[3], const float dir[3], float tfar, float time)
 {
     hairobb_ray ray;
@@ -181,6 +211,12 @@ static int row_alloc(group_row *r, int instances, int bvh_count)
 
 static void row_free(group_row *r)
 {
+    if (r->embree)
+        emb_free(r->embree);
+    for (int g = 0; r->embree_indices && g < r->bvh_count; g++)
+        free(r->embree_indices[g]);
+    free(r->embree_indices);
+    free(r->embree_counts);
     hairobb_scene_free(r->scene);
     for (int i = 0; r->owned && r->bvh && i < r->bvh_count; i++)
         hairobb_free(r->bvh[i]);
@@ -364,6 +400,46 @@ static int build_one_tree(const hair_scene *s, const size_t *first, size_t stran
     return 0;
 }
 
+/* Embree over the same hair as k curve geometries of one scene (flat
+   Bezier, its default; the scene's arrays shared, an index buffer each). */
+static int build_embree_groups(const hair_scene *s, const size_t *first, size_t strands, int count, group_row *r)
+{
+    size_t memory = 0;
+    if ((size_t)count > strands)
+        count = (int)strands;
+    snprintf(r->label, sizeof r->label, "Embree %d geom", count);
+    if (row_alloc(r, count, count) != 0)
+        return 1;
+    r->instances = 0;
+    r->segments = s->segment_count;
+    r->embree_indices = (uint32_t **)calloc((size_t)count, sizeof *r->embree_indices);
+    r->embree_counts = (size_t *)calloc((size_t)count, sizeof *r->embree_counts);
+    if (!r->embree_indices || !r->embree_counts || s->basis != SCENE_BASIS_BEZIER)
+        return 1;
+    for (int g = 0; g < count; g++) {
+        size_t begin = first[strands * (size_t)g / (size_t)count], end = first[strands * (size_t)(g + 1) / (size_t)count];
+        r->embree_indices[g] = (uint32_t *)malloc((end - begin ? end - begin : 1) * sizeof(uint32_t));
+        if (!r->embree_indices[g])
+            return 1;
+        memcpy(r->embree_indices[g], s->indices + begin, (end - begin) * sizeof(uint32_t));
+        r->embree_counts[g] = end - begin;
+        r->first_segment[g] = (uint32_t)begin;
+    }
+    progress_start("  %s: build", r->label);
+    r->embree = emb_build_groups(s->vertices, s->vertex_count, (const uint32_t *const *)r->embree_indices, r->embree_counts,
+                                 (size_t)count, EMB_FLAT_BEZIER, 0, &memory, &r->build_seconds);
+    progress("%s %.3f s", r->embree ? "done" : "failed", r->build_seconds);
+    if (!r->embree)
+        return 1;
+    r->bvh_bytes = memory;
+    r->accel.embree = r->embree;
+    r->accel.first_segment = r->first_segment;
+    r->tracer.accel = &r->accel;
+    r->tracer.intersect = embree_groups_intersect;
+    r->tracer.occluded = embree_groups_occluded;
+    return 0;
+}
+
 /* ======================================================================== */
 /* Hits against the one BVH's, and timing in rounds                         */
 /* ======================================================================== */
@@ -375,7 +451,7 @@ static void check_rows(const options *o, const ray_set *rays, hit_record *base, 
 {
     int k = rays->kind;
     trace_pass(&rows[ROW_ONE].tracer, rays, base, max_threads(o));
-    for (int row = ROW_SCENES; row < ROW_INSTANCED; row++) {
+    for (int row = ROW_SCENES; row < ROW_EMBREE; row++) {   /* Embree's flat curves are another surface */
         group_row *r = &rows[row];
         if (!r->measured)
             continue;
@@ -433,6 +509,11 @@ static void time_rows(const options *o, const ray_set *rays, hit_record *hits, g
                 ratios[round] = with_ratio ? mrays[row][round] / mrays[ROW_ONE][round] : NAN;
             r->mrays[k][t] = spread_of(mrays[row], o->rounds);
             r->ratio[k][t] = spread_of(ratios, with_ratio ? o->rounds : 0);
+            if (row >= ROW_ONE_TREE && row < ROW_EMBREE && rows[row + GROUP_SETS].measured) {   /* against Embree's same k */
+                for (int round = 0; round < o->rounds; round++)
+                    ratios[round] = mrays[row][round] / mrays[row + GROUP_SETS][round];
+                r->pair[k][t] = spread_of(ratios, o->rounds);
+            }
         }
     }
 }
@@ -486,16 +567,18 @@ static void print_rows(const options *o, const hair_scene *s, const scene_layout
         }
         size_t bytes = r->bvh_bytes + r->scene_bytes;
         double per_bvh = (row == ROW_INSTANCED ? (double)r->segments / INSTANCES : (double)r->segments) /
-                         (double)r->bvh_count;
+                         (double)(r->embree ? 1 : r->bvh_count);
         char instances[16] = "-", scene_ms[16] = "-", scene_kb[16] = "-";
         if (r->instances) {
             snprintf(instances, sizeof instances, "%d", r->instances);
             snprintf(scene_ms, sizeof scene_ms, "%.3f", r->scene_seconds * 1e3);
             snprintf(scene_kb, sizeof scene_kb, "%.1f", (double)r->scene_bytes / 1024.0);
         }
-        printf("%-14s %9s %5d %12.0f %10.3f %10s %9.1f %10.1f %10s %8.2f\n", r->label, instances, r->bvh_count, per_bvh,
-               r->build_seconds, scene_ms, (double)bytes / 1048576.0, (double)bytes / (double)r->segments, scene_kb,
-               r->boxes_per_ray);
+        char boxes[16] = "-";
+        if (r->boxes_per_ray == r->boxes_per_ray)
+            snprintf(boxes, sizeof boxes, "%.2f", r->boxes_per_ray);
+        printf("%-14s %9s %5d %12.0f %10.3f %10s %9.1f %10.1f %10s %8s\n", r->label, instances, r->embree ? 1 : r->bvh_count, per_bvh,
+               r->build_seconds, scene_ms, (double)bytes / 1048576.0, (double)bytes / (double)r->segments, scene_kb, boxes);
     }
 
     for (int table = 0; table < 2; table++) {
@@ -522,6 +605,20 @@ static void print_rows(const options *o, const hair_scene *s, const scene_layout
                         printf(" %-22s", cell3(cell, sizeof cell, table == 0 ? r->mrays[k][t] : r->ratio[k][t]));
             printf("\n");
         }
+    }
+
+    printf("\nk groups in one hairobb BVH / Embree's k curve geometries in one scene, the ratio taken within each round: median "
+           "of %d round%s [min-max]\n", o->rounds, o->rounds == 1 ? "" : "s");
+    for (int row = ROW_ONE_TREE; row < ROW_EMBREE; row++) {
+        const group_row *r = &rows[row];
+        if (!r->measured || !rows[row + GROUP_SETS].measured)
+            continue;
+        printf("%-14s", r->label);
+        for (int k = 0; k < RAY_KIND_COUNT; k++)
+            for (int t = 0; t < o->thread_count_count; t++)
+                if (o->ray_kind_enabled[k] && rays[k].count)
+                    printf(" %-22s", cell3(cell, sizeof cell, r->pair[k][t]));
+        printf("\n");
     }
 
     printf("\nhits against the one BVH's, every ray: hit or miss (shadow: occluded or not) differs; both hit, another "
@@ -572,8 +669,8 @@ static int run_group_scene(const options *given, int index, int order)
         printf("\n=== groups: %s skipped: %s\n", o.scenes[index], loaded < 0 ? why : "could not be loaded");
         return loaded > 0;
     }
-    /* the one BVH and the six rows of groups each hold the whole hair */
-    if (!memory_fits((2.0 * GROUP_SETS) * HAIROBB_WITH_COPY_BYTES_PER_SEGMENT * (double)s.segment_count, "the BVHs",
+    /* the one BVH and the six rows of groups each hold the whole hair, and Embree's four */
+    if (!memory_fits((3.0 * GROUP_SETS) * HAIROBB_WITH_COPY_BYTES_PER_SEGMENT * (double)s.segment_count, "the BVHs",
                      why_not, sizeof why_not)) {
         printf("\n=== groups: %s skipped: %s\n", s.name, why_not);
         scene_free(&s);
@@ -636,6 +733,16 @@ static int run_group_scene(const options *given, int index, int order)
         failed = build_one_tree(&s, first, strands, group_counts[set], r);
         if (!failed) {
             r->boxes_per_ray = one->boxes_per_ray;
+            r->measured = 1;
+        }
+    }
+
+    /* Embree: the hair as 1, 4, 16, 64 geometries of one scene (Bezier scenes) */
+    for (int set = 0; set < GROUP_SETS && !failed && s.basis == SCENE_BASIS_BEZIER; set++) {
+        group_row *r = &rows[ROW_EMBREE + set];
+        failed = build_embree_groups(&s, first, strands, group_counts[set], r);
+        if (!failed) {
+            r->boxes_per_ray = NAN;
             r->measured = 1;
         }
     }

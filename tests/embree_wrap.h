@@ -239,6 +239,74 @@ static inline emb_scene *emb_build(const float *vertices, size_t vertex_count, c
                             memory_bytes, build_seconds);
 }
 
+/* Several hair groups as Embree holds them: one scene of `groups` curve
+   geometries of `type` (flat or round Bezier), geometry g over the shared
+   vertex buffer with its own index buffer (group_indices[g],
+   group_counts[g] segments). Embree builds one tree over every geometry of
+   a scene (its leaves hold one geometry each). As emb_build otherwise. */
+static inline emb_scene *emb_build_groups(const float *vertices, size_t vertex_count, const uint32_t *const *group_indices,
+                                          const size_t *group_counts, size_t groups, int type, int threads, size_t *memory_bytes,
+                                          double *build_seconds)
+{
+    emb_scene *e;
+    char config[32] = "";
+    size_t g;
+    if (memory_bytes)
+        *memory_bytes = 0;
+    if (build_seconds)
+        *build_seconds = 0.0;
+    if (type != EMB_FLAT_BEZIER && type != EMB_ROUND_BEZIER)
+        return NULL;
+    e = (emb_scene *)calloc(1, sizeof *e);
+    if (!e)
+        return NULL;
+    if (threads > 0)
+        snprintf(config, sizeof config, "threads=%d", threads);
+    e->device = rtcNewDevice(config[0] ? config : NULL);
+    if (!e->device) {
+        free(e);
+        return NULL;
+    }
+    rtcSetDeviceErrorFunction(e->device, emb_error_callback, NULL);
+    rtcSetDeviceMemoryMonitorFunction(e->device, emb_memory_callback, e);
+    e->scene = rtcNewScene(e->device);
+    for (g = 0; e->scene && g < groups; g++) {
+        RTCGeometry geometry = rtcNewGeometry(e->device, type == EMB_ROUND_BEZIER ? RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE
+                                                                                   : RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE);
+        if (!geometry) {
+            emb_free(e);
+            return NULL;
+        }
+        rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, (void *)vertices, 0, 4 * sizeof(float),
+                                   vertex_count);
+        rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT, (void *)group_indices[g], 0, sizeof(uint32_t),
+                                   group_counts[g]);
+        rtcCommitGeometry(geometry);
+        rtcAttachGeometryByID(e->scene, geometry, (unsigned)g);
+        rtcReleaseGeometry(geometry);
+    }
+    if (!e->scene) {
+        emb_free(e);
+        return NULL;
+    }
+    rtcSetSceneBuildQuality(e->scene, RTC_BUILD_QUALITY_MEDIUM);
+    {
+        int64_t before = emb_allocated_bytes(e), grown;
+        double start = scene_now();
+        rtcCommitScene(e->scene);
+        if (build_seconds)
+            *build_seconds = scene_now() - start;
+        grown = emb_allocated_bytes(e) - before;
+        if (memory_bytes)
+            *memory_bytes = grown > 0 ? (size_t)grown : 0;
+    }
+    if (rtcGetDeviceError(e->device) != RTC_ERROR_NONE) {
+        emb_free(e);
+        return NULL;
+    }
+    return e;
+}
+
 static inline void emb_init_ray(struct RTCRay *ray, const float org[3], float tnear, const float dir[3], float tfar)
 {
     ray->org_x = org[0]; ray->org_y = org[1]; ray->org_z = org[2];
@@ -276,6 +344,27 @@ static inline int emb_intersect_at_time(const emb_scene *e, const float org[3], 
         *v = ray_hit.hit.v;
     if (prim)
         *prim = ray_hit.hit.primID;
+    return 1;
+}
+
+/* emb_intersect_at_time that also names the geometry hit (emb_build_groups). */
+static inline int emb_intersect_group(const emb_scene *e, const float org[3], const float dir[3], float tfar, float *t, float *u,
+                                      uint32_t *geometry, uint32_t *prim)
+{
+    struct RTCRayHit ray_hit;
+    struct RTCIntersectContext context;
+    emb_init_ray(&ray_hit.ray, org, 0.0f, dir, tfar);
+    ray_hit.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    ray_hit.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    ray_hit.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcInitIntersectContext(&context);
+    rtcIntersect1(e->scene, &context, &ray_hit);
+    if (ray_hit.hit.geomID == RTC_INVALID_GEOMETRY_ID)
+        return 0;
+    *t = ray_hit.ray.tfar;
+    *u = ray_hit.hit.u;
+    *geometry = ray_hit.hit.geomID;
+    *prim = ray_hit.hit.primID;
     return 1;
 }
 
