@@ -30,7 +30,8 @@ TESTS = $(QUICK) $(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_
 # (any report aborts the test), the threads test under ThreadSanitizer, and
 # the fuzzers (clang); named first, as the longest, since the tests run two
 # at a time on 2 cores
-SANITIZED = $(B)/fuzz_build_45s $(B)/asan_test_options $(B)/fuzz_scene_30s $(B)/fuzz_hair_30s $(B)/fuzz_load_30s $(B)/asan_test_round $(B)/asan_test_unit_w8 \
+SANITIZED = $(B)/fuzz_build_45s $(B)/asan_test_options $(B)/fuzz_scene_30s $(B)/fuzz_groups_30s $(B)/fuzz_hair_30s $(B)/fuzz_load_30s \
+            $(B)/asan_test_round $(B)/asan_test_unit_w8 \
             $(B)/asan_test_stress $(B)/tsan_test_threads $(B)/asan_test_reference $(B)/asan_test_save_w4 $(B)/asan_test_scene \
             $(B)/asan_test_groups
 ASAN      = -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
@@ -158,14 +159,17 @@ $(B)/fuzz_build_45s: $(B)/fuzz_build tests/fuzz/fuzz_run.sh
 	$(call fuzz_script,bvh_build,45)
 $(B)/fuzz_scene_30s: $(B)/fuzz_scene tests/fuzz/fuzz_run.sh
 	$(call fuzz_script,scene,30)
+$(B)/fuzz_groups_30s: $(B)/fuzz_groups tests/fuzz/fuzz_run.sh
+	$(call fuzz_script,groups,30)
 $(B)/fuzz_hair_30s: $(B)/fuzz_hair tests/fuzz/fuzz_run.sh
 	$(call fuzz_script,hair_read,30)
 $(B)/fuzz_load_30s: $(B)/fuzz_load tests/fuzz/fuzz_run.sh
 	$(call fuzz_script,bvh_load,30)
 # long runs: FUZZ_SECONDS each
-fuzz: $(B)/fuzz_build $(B)/fuzz_scene $(B)/fuzz_hair $(B)/fuzz_load
+fuzz: $(B)/fuzz_build $(B)/fuzz_scene $(B)/fuzz_groups $(B)/fuzz_hair $(B)/fuzz_load
 	sh tests/fuzz/fuzz_run.sh $(B)/fuzz_build tests/fuzz/corpus/bvh_build $(FUZZ_SECONDS)
 	sh tests/fuzz/fuzz_run.sh $(B)/fuzz_scene tests/fuzz/corpus/scene $(FUZZ_SECONDS)
+	sh tests/fuzz/fuzz_run.sh $(B)/fuzz_groups tests/fuzz/corpus/groups $(FUZZ_SECONDS)
 	sh tests/fuzz/fuzz_run.sh $(B)/fuzz_hair tests/fuzz/corpus/hair_read $(FUZZ_SECONDS)
 	sh tests/fuzz/fuzz_run.sh $(B)/fuzz_load tests/fuzz/corpus/bvh_load $(FUZZ_SECONDS)
 

@@ -1,18 +1,70 @@
 /* fuzz_checks.h - what the fuzz targets assert of any BVH they built: a
    traced ray's hit is sane (t finite and in [tnear, tfar], u in [0,1],
-   prim_id a segment, occluded1 true wherever intersect1 hits), a miss
-   names no segment; and the rays they trace through a BVH's bounds. A
-   failure aborts, so libFuzzer reports the input. */
+   prim_id a segment, instance_id unset, group 0, occluded1 true
+   wherever intersect1 hits), a miss names no segment, instance or group; and the rays they trace
+   through a BVH's bounds. A failure aborts, so libFuzzer reports the
+   input. */
 #ifndef HAIROBB_TESTS_FUZZ_CHECKS_H
 #define HAIROBB_TESTS_FUZZ_CHECKS_H
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 static void fuzz_fail(const char *what)
 {
-    (void)what;   /* visible in the debugger and the stack trace */
+    fprintf(stderr, "fuzz check failed: %s\n", what);   /* above libFuzzer's report */
     abort();
+}
+
+/* Whether the BVH whose hits a target checks is of tubes (1) or ribbons. */
+static int fuzz_round;
+
+/* Ng is a unit vector (HITS), up to rounding; but where the library
+   normalises a vector whose squared length is subnormal, which loses its
+   length (tests/fuzz/findings/README.md): a ribbon's normal where the ray
+   runs along the tangent (here within 1e-15), a tube's where it is that
+   short (radii under about 1e-20, a hit on the centre line). There Ng is
+   only asked to be a direction. Back to 1e-5 alone once that is fixed;
+   -DFUZZ_STRICT_NG asks it now (the findings' inputs then abort). */
+static int fuzz_unit_normal(const hairobb_ray *ray, const hairobb_hit *hit)
+{
+    const float *d = ray->dir, *t = hit->tangent;
+    double n = sqrt((double)hit->Ng[0] * hit->Ng[0] + (double)hit->Ng[1] * hit->Ng[1] + (double)hit->Ng[2] * hit->Ng[2]);
+    double c[3], dd, tt;
+    if (fabs(n - 1.0) <= 1e-5) return 1;
+#ifdef FUZZ_STRICT_NG
+    return 0;
+#endif
+    if (!(n >= 0.5 && n <= 1.5)) return 0;
+    if (fuzz_round) return 1;
+    c[0] = (double)d[1] * t[2] - (double)d[2] * t[1];
+    c[1] = (double)d[2] * t[0] - (double)d[0] * t[2];
+    c[2] = (double)d[0] * t[1] - (double)d[1] * t[0];
+    dd = (double)d[0] * d[0] + (double)d[1] * d[1] + (double)d[2] * d[2];
+    tt = (double)t[0] * t[0] + (double)t[1] * t[1] + (double)t[2] * t[2];
+    return c[0] * c[0] + c[1] * c[1] + c[2] * c[2] <= 1e-30 * dd * tt;
+}
+
+/* A hit of the ray is sane: t finite and in [tnear, tfar], u in [0,1],
+   prim_id below the segment count, instance_id the one expected
+   (HAIROBB_INVALID_ID from a BVH's own calls), group_id 0, Ng a unit
+   vector. */
+static void fuzz_check_hit(const hairobb_ray *ray, const hairobb_hit *hit, size_t segments, uint32_t instance_id)
+{
+    if (!(hit->t >= ray->tnear && hit->t <= ray->tfar) || !isfinite(hit->t)) fuzz_fail("hit outside [tnear, tfar]");
+    if (!(hit->u >= 0.0f && hit->u <= 1.0f)) fuzz_fail("u outside [0,1]");
+    if (hit->prim_id >= segments) fuzz_fail("prim_id past the segments");
+    if (hit->instance_id != instance_id) fuzz_fail("instance_id not the one the manual says");
+    if (hit->group_id != 0) fuzz_fail("group_id not 0 (hairobb_build's BVHs are one group)");
+    if (!fuzz_unit_normal(ray, hit)) fuzz_fail("Ng not a unit vector");
+}
+
+/* A miss names nothing: prim_id, instance_id and group_id HAIROBB_INVALID_ID. */
+static void fuzz_check_miss(const hairobb_hit *hit)
+{
+    if (hit->prim_id != HAIROBB_INVALID_ID || hit->instance_id != HAIROBB_INVALID_ID || hit->group_id != HAIROBB_INVALID_ID)
+        fuzz_fail("a miss with an id");
 }
 
 static void fuzz_check_ray(const hairobb_bvh *bvh, const hairobb_ray *ray, size_t segments)
@@ -20,12 +72,10 @@ static void fuzz_check_ray(const hairobb_bvh *bvh, const hairobb_ray *ray, size_
     hairobb_hit hit;
     int hit_any = hairobb_intersect1(bvh, ray, &hit), occluded = hairobb_occluded1(bvh, ray);
     if (hit_any) {
-        if (!(hit.t >= ray->tnear && hit.t <= ray->tfar) || !isfinite(hit.t)) fuzz_fail("hit outside [tnear, tfar]");
-        if (!(hit.u >= 0.0f && hit.u <= 1.0f)) fuzz_fail("u outside [0,1]");
-        if (hit.prim_id >= segments) fuzz_fail("prim_id past the segments");
+        fuzz_check_hit(ray, &hit, segments, HAIROBB_INVALID_ID);
         if (!occluded) fuzz_fail("intersect1 hits where occluded1 does not");
-    } else if (hit.prim_id != HAIROBB_INVALID_ID) {
-        fuzz_fail("a miss with a prim_id");
+    } else {
+        fuzz_check_miss(&hit);
     }
 }
 
