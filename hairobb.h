@@ -7579,20 +7579,39 @@ static float hairobb__ribbon_f(const hairobb__ray_poly *c, float u, float *deriv
     return products[0] + products[1];
 }
 
+/* n made a unit vector in place; 0 where it has no length (zero, or not
+   finite). Where its squared length leaves float's normal range (a
+   normal of 1e-20 and less, found where a ray runs along a ribbon's
+   tangent or a tube is that thin), it is first divided by its largest
+   component, so that sqrtf keeps its bits; elsewhere the plain n /
+   |n|. */
+HAIROBB__INLINE int hairobb__normalize3(float n[3])
+{
+    float d = hairobb__dot3(n, n), length;
+    int k;
+    if (!(d >= 0x1p-100f && d <= 0x1p100f)) {
+        float largest = hairobb__maxf(hairobb__maxf(fabsf(n[0]), fabsf(n[1])), fabsf(n[2]));
+        if (!(largest > 0.0f) || !(largest < INFINITY)) return 0;
+        for (k = 0; k < 3; ++k) n[k] /= largest;
+        d = hairobb__dot3(n, n);
+    }
+    length = sqrtf(d);
+    for (k = 0; k < 3; ++k) n[k] /= length;
+    return 1;
+}
+
 /* A hit in an instance's object space taken to world space: the tangent
    by the map, the normal by its inverse transposed; t, u, v are the same. */
 static void hairobb__hit_to_world(const hairobb__placed *placed, uint32_t id, hairobb_hit *hit)
 {
     const float *m = placed->to_world, *inv = placed->to_object;
-    float tangent[3], n[3], length;
+    float tangent[3], n[3];
     int i;
     for (i = 0; i < 3; ++i) {
         tangent[i] = m[4 * i] * hit->tangent[0] + m[4 * i + 1] * hit->tangent[1] + m[4 * i + 2] * hit->tangent[2];
         n[i] = inv[i] * hit->Ng[0] + inv[4 + i] * hit->Ng[1] + inv[8 + i] * hit->Ng[2];
     }
-    length = sqrtf(hairobb__dot3(n, n));
-    if (length > 0.0f && length < INFINITY)
-        for (i = 0; i < 3; ++i) hit->Ng[i] = n[i] / length;
+    if (hairobb__normalize3(n)) memcpy(hit->Ng, n, sizeof n);
     memcpy(hit->tangent, tangent, sizeof tangent);
     hit->instance_id = id;
 }
@@ -8494,7 +8513,9 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
            rounding noise, a disk in a random plane */
         hairobb__v4 lo = hairobb__v4_max(hairobb__v4_abs(hairobb__v4_load(cp)), hairobb__v4_abs(hairobb__v4_load(cp + 4)));
         hairobb__v4 hi = hairobb__v4_max(hairobb__v4_abs(hairobb__v4_load(cp + 8)), hairobb__v4_abs(hairobb__v4_load(cp + 12)));
-        float noise = hairobb__v4_hmax(hairobb__v4_max(lo, hi)) * (16.0f * FLT_EPSILON);
+        float largest[4], noise;
+        hairobb__v4_store(largest, hairobb__v4_max(lo, hi));   /* x, y, z: not the radius, which rounds on its own */
+        noise = hairobb__maxf(hairobb__maxf(largest[0], largest[1]), largest[2]) * (16.0f * FLT_EPSILON);
         min_tangent2 = hairobb__maxf(min_tangent2, noise * noise);
     }
     /* bounds on |z'| and r over the segment (hairobb__tube_root_unreachable) */
@@ -8711,7 +8732,7 @@ static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *r
 static void hairobb__tube_hit_at(const hairobb__ray_state *rs, const float *cp, float u, float t, int cap, hairobb_hit *hit)
 {
     float s = 1.0f - u, b[4], db[4], d2b[4], C[4], T[4], T2[4], r, dr;
-    float R[3], n[3], cross[3], along, tperp2, denominator, length, scale;
+    float R[3], n[3], cross[3], along, tperp2, denominator, scale;
     const float *unit_dir = rs->frame + 6;
     hairobb__v4 value, tangent, second;
     int i, k;
@@ -8737,12 +8758,9 @@ static void hairobb__tube_hit_at(const hairobb__ray_state *rs, const float *cp, 
     denominator = hairobb__dot3(T, T) - hairobb__dot3(R, T2);
     scale = denominator != 0.0f ? r * dr / denominator : 0.0f;
     for (k = 0; k < 3; ++k) n[k] = cap ? (u > 0.5f ? T[k] : -T[k]) : R[k] - scale * T[k];   /* a cap: along the strand, out */
-    length = sqrtf(hairobb__dot3(n, n));
-    if (!(length > 0.0f) || !(length < INFINITY)) {   /* degenerate: against the ray */
+    if (!hairobb__normalize3(n))   /* degenerate: against the ray */
         for (k = 0; k < 3; ++k) n[k] = -unit_dir[k];
-        length = 1.0f;
-    }
-    for (k = 0; k < 3; ++k) hit->Ng[k] = n[k] / length;
+    for (k = 0; k < 3; ++k) hit->Ng[k] = n[k];
     along = hairobb__dot3(T, unit_dir);
     tperp2 = hairobb__dot3(T, T) - along * along;
     cross[0] = T[1] * R[2] - T[2] * R[1];
@@ -8781,7 +8799,7 @@ static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs
     }
     hairobb__v4 x4 = hairobb__v4_load(c->x), y4 = hairobb__v4_load(c->y), z4 = hairobb__v4_set1(0.0f), r4 = hairobb__v4_load(c->r);
     hairobb__v4 value, d1, tangent, neg_dir, n4;
-    float at[4], tangent_at[4], tangent_xy[2], x, y, r, tlen2, along, n[4], nlen;
+    float at[4], tangent_at[4], tangent_xy[2], x, y, r, tlen2, along, n[4];
     const float *unit_dir = rs->frame + 6;
     hairobb__bezier_v4(hairobb__v4_load(cp), hairobb__v4_load(cp + 4), hairobb__v4_load(cp + 8), hairobb__v4_load(cp + 12),
                        u, &value, &tangent);
@@ -8807,8 +8825,7 @@ static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs
     n4 = hairobb__v4_add(neg_dir, tlen2 > 0.0f ? hairobb__v4_div(hairobb__v4_mul(hairobb__v4_set1(along), tangent), hairobb__v4_set1(tlen2))
                                                : hairobb__v4_set1(0.0f));
     hairobb__v4_store(n, n4);
-    nlen = sqrtf(hairobb__dot3(n, n));
-    hairobb__v4_store(n, nlen > 0.0f ? hairobb__v4_div(n4, hairobb__v4_set1(nlen)) : neg_dir);
+    if (!hairobb__normalize3(n)) hairobb__v4_store(n, neg_dir);   /* the ray along the tangent: against the ray */
     memcpy(hit->Ng, n, sizeof hit->Ng);
     hit->t = t;
     hit->u = u;
@@ -9425,6 +9442,7 @@ HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairob
 #define hairobb__tube_hit_at hairobb__tube_hit_at_avx2
 #define hairobb__hit_filtered_out hairobb__hit_filtered_out_avx2
 #define hairobb__hit_to_world hairobb__hit_to_world_avx2
+#define hairobb__normalize3 hairobb__normalize3_avx2
 #define hairobb__ignored_before hairobb__ignored_before_avx2
 #define hairobb__shares_end hairobb__shares_end_avx2
 #define hairobb__horner hairobb__horner_avx2

@@ -903,9 +903,54 @@ static void test_joints(void)
     scene_free(&sc);
 }
 
+/* Ng is a unit vector however short the vector normalised (a fuzzer's
+   finding, tests/fuzz/findings/): a ribbon hit by a ray within 1e-3 to
+   1e-30 of its tangent, a tube of radius 1e-3 to 1e-22 (and 1e13, 1e17:
+   a squared length past 2^100), a ray half a radius off its axis. (Thinner
+   tubes, and one of radius 1e15 on a segment of length 1, are missed: q's
+   rounding; not this check's.) */
+static void test_tiny_normals(void)
+{
+    static const float sizes[] = {1e-3f, 1e-19f, 1e-20f, 1e-21f, 1e-22f, 1e-25f, 1e-30f, 1e13f, 1e17f};
+    uint32_t index = 0;
+    size_t k, hits = 0;
+    double worst = 0.0;
+    for (k = 0; k < sizeof sizes / sizeof sizes[0]; ++k) {
+        float e = sizes[k], ribbon[16] = {0, 0, 0, 0.1f, 1.0f / 3, 0, 0, 0.1f, 2.0f / 3, 0, 0, 0.1f, 1, 0, 0, 0.1f};
+        float tube[16] = {0, 0, 0, 0, 1.0f / 3, 0, 0, 0, 2.0f / 3, 0, 0, 0, 1, 0, 0, 0};
+        hairobb_ray along = {{-1.0f, 0.0f, 0.0f}, 0.0f, {1.0f, 0.0f, 0.0f}, INFINITY, 0.0f};
+        hairobb_ray across = {{0.5f, 0.0f, -1.0f}, 0.0f, {0.0f, 0.0f, 1.0f}, INFINITY, 0.0f};
+        hairobb_build_options round = hairobb_default_options();
+        hairobb_bvh *bvh = NULL;
+        hairobb_hit hit;
+        int shape;
+        ribbon[5] = e / 3; ribbon[9] = 2 * e / 3; ribbon[13] = e;   /* rising by e along x */
+        tube[3] = tube[7] = tube[11] = tube[15] = e;
+        across.org[1] = 0.5f * e;
+        across.org[2] = -2.0f * (e > 1.0f ? e : 1.0f);
+        round.shape = HAIROBB_SHAPE_ROUND;
+        for (shape = 0; shape < 2; ++shape) {
+            if ((shape == 0 && e > 1.0f) || (shape == 1 && e < 1e-24f)) continue;
+            CHECK(hairobb_build(shape ? tube : ribbon, 4, &index, 1, shape ? &round : NULL, &bvh) == HAIROBB_OK, "tiny normals: builds");
+            if (!bvh || !hairobb_intersect1(bvh, shape ? &across : &along, &hit)) printf("  tiny normals: %s %g: a miss\n", shape ? "tube" : "ribbon", (double)e);
+            else {
+                double off = fabs(sqrt((double)hit.Ng[0] * hit.Ng[0] + (double)hit.Ng[1] * hit.Ng[1] + (double)hit.Ng[2] * hit.Ng[2]) - 1.0);
+                ++hits;
+                worst = off > worst ? off : worst;
+                CHECK(off <= 1e-6, "%s of %g: |Ng| - 1 = %.3g", shape ? "a tube of radius" : "a ribbon along the ray within", (double)e, off);
+            }
+            hairobb_free(bvh);
+            bvh = NULL;
+        }
+    }
+    printf("tiny normals: %zu hits on ribbons along the ray and tubes of radius 1e-22 to 1e17, worst ||Ng| - 1| %.2g\n", hits, worst);
+    CHECK(hits >= 14, "tiny normals: only %zu hits", hits);
+}
+
 int main(void)
 {
     double t0 = scene_now();
+    test_tiny_normals();
     test_radius_range();
     test_degenerate_segments();
     test_hard_rays();
