@@ -7589,7 +7589,7 @@ HAIROBB__INLINE int hairobb__normalize3(float n[3])
 {
     float d = hairobb__dot3(n, n), length;
     int k;
-    if (!(d >= 0x1p-100f && d <= 0x1p100f)) {
+    if (!(d >= 7.88860905e-31f && d <= 1.26765060e30f)) {   /* 2^-100, 2^100 */
         float largest = hairobb__maxf(hairobb__maxf(fabsf(n[0]), fabsf(n[1])), fabsf(n[2]));
         if (!(largest > 0.0f) || !(largest < INFINITY)) return 0;
         for (k = 0; k < 3; ++k) n[k] /= largest;
