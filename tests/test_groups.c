@@ -172,6 +172,37 @@ static void make_rays(const grouped *gr, const hair_scene *s, size_t n, uint64_t
     }
 }
 
+/* Ray i of the set, from org and dir, at `time`. */
+static hairobb_ray ray_of(const float *org, const float *dir, size_t i, float time)
+{
+    hairobb_ray ray;
+    memcpy(ray.org, org + 3 * i, sizeof ray.org);
+    memcpy(ray.dir, dir + 3 * i, sizeof ray.dir);
+    ray.tnear = 0.0f;
+    ray.tfar = INFINITY;
+    ray.time = time;
+    return ray;
+}
+
+/* The rays traced by a and b; the count of rays whose hits differ (b's
+   ids mapped to groups where gr is given), and a's hits in *hits. Ray i
+   at times[i % 3] (NULL: 0). */
+static size_t trace_differ(const hairobb_bvh *a, const hairobb_bvh *b, const grouped *gr, const float *org, const float *dir, size_t rays,
+                           const float *times, size_t *hits)
+{
+    size_t i, differ = 0;
+    *hits = 0;
+    for (i = 0; a && b && i < rays; ++i) {
+        hairobb_ray ray = ray_of(org, dir, i, times ? times[i % 3] : 0.0f);
+        hairobb_hit ha, hb;
+        int got_a = hairobb_intersect1(a, &ray, &ha), got_b = hairobb_intersect1(b, &ray, &hb);
+        if (got_b && gr) map_ids(gr, &hb);
+        *hits += (size_t)got_a;
+        differ += !same_hit(got_a, &ha, got_b, &hb);
+    }
+    return differ;
+}
+
 /* The multi-group BVH against the one BVH: hits, occlusion, a bounce from
    each hit, ray masks, what filters are shown. */
 static void compare_groups(const char *name, const grouped *gr, const hair_scene *s, const hairobb_build_options *options,
@@ -290,21 +321,7 @@ static void test_refit_group(const grouped *gr_in, const float *org, const float
     r = hairobb_refit_group(groups, 1, moved, NULL, NULL);
     CHECK(r == HAIROBB_OK, "refit_group: %s", hairobb_result_string(r));
     memset(moved, 0, 16 * n);   /* the BVH keeps its own copy */
-    for (i = 0; i < rays; ++i) {
-        hairobb_ray ray;
-        hairobb_hit a, b;
-        int got_a, got_b;
-        memcpy(ray.org, org + 3 * i, sizeof ray.org);
-        memcpy(ray.dir, dir + 3 * i, sizeof ray.dir);
-        ray.tnear = 0.0f;
-        ray.tfar = INFINITY;
-        ray.time = 0.0f;
-        got_a = hairobb_intersect1(groups, &ray, &a);
-        got_b = hairobb_intersect1(one, &ray, &b);
-        if (got_b) map_ids(&gr, &b);
-        hits += (size_t)got_a;
-        differ += !same_hit(got_a, &a, got_b, &b);
-    }
+    differ = trace_differ(groups, one, &gr, org, dir, rays, NULL, &hits);
     printf("refit_group (group 1 of %zu moved, after a refused refit; copy %s): %zu rays, %zu hits, %zu differ from one BVH built "
            "moved; memory %zu bytes (one BVH %zu)\n", gr.count, copy == HAIROBB_OFF ? "off" : "on", rays, hits, differ,
            hairobb_memory_bytes(groups), hairobb_memory_bytes(one));
@@ -325,7 +342,7 @@ static void test_motion(const grouped *gr, const float *org, const float *dir, s
     float *later[MAX_GROUPS], *all_later = (float *)malloc(16 * gr->all_vertex_count);
     hairobb_build_options o = hairobb_default_options();
     hairobb_bvh *groups = NULL, *one = NULL;
-    size_t g, i, differ = 0, hits = 0, vbase = 0;
+    size_t g, differ = 0, hits = 0, vbase = 0;
     for (g = 0; g < gr->count; ++g) {
         size_t n = gr->group[g].vertex_count, j;
         later[g] = (float *)malloc(16 * (n ? n : 1));
@@ -344,21 +361,7 @@ static void test_motion(const grouped *gr, const float *org, const float *dir, s
     CHECK(hairobb_build_groups(moving, gr->count, &o, &groups) == HAIROBB_OK, "motion: builds");
     o.time_vertices = all_steps;
     CHECK(hairobb_build(NULL, gr->all_vertex_count, gr->all_indices, gr->all_segment_count, &o, &one) == HAIROBB_OK, "motion: one BVH");
-    for (i = 0; groups && one && i < rays; ++i) {
-        hairobb_ray ray;
-        hairobb_hit a, b;
-        int got_a, got_b;
-        memcpy(ray.org, org + 3 * i, sizeof ray.org);
-        memcpy(ray.dir, dir + 3 * i, sizeof ray.dir);
-        ray.tnear = 0.0f;
-        ray.tfar = INFINITY;
-        ray.time = times[i % 3];
-        got_a = hairobb_intersect1(groups, &ray, &a);
-        got_b = hairobb_intersect1(one, &ray, &b);
-        if (got_b) map_ids(gr, &b);
-        hits += (size_t)got_a;
-        differ += !same_hit(got_a, &a, got_b, &b);
-    }
+    differ = trace_differ(groups, one, gr, org, dir, rays, times, &hits);
     printf("motion (2 steps, rays at times 0, 0.3, 1): %zu rays, %zu hits, %zu differ from one BVH\n", rays, hits, differ);
     CHECK(differ == 0 && hits > rays / 4, "motion: %zu differ, %zu hits", differ, hits);
     hairobb_free(groups);
@@ -374,7 +377,7 @@ static void test_save_load(const grouped *gr, const float *org, const float *dir
 {
     hairobb_bvh *groups = NULL, *loaded = NULL, *other = NULL;
     hairobb_group shifted[MAX_GROUPS];
-    size_t size, i, differ = 0, hits = 0;
+    size_t size, differ = 0, hits = 0;
     unsigned char *bytes;
     hairobb_result r;
     CHECK(hairobb_build_groups(gr->group, gr->count, NULL, &groups) == HAIROBB_OK, "save: builds");
@@ -392,20 +395,7 @@ static void test_save_load(const grouped *gr, const float *org, const float *dir
     CHECK(r == HAIROBB_ERROR_MISMATCH && !other, "load_groups over other groups: %s", hairobb_result_string(r));
     r = hairobb_load_groups(bytes, size, gr->group, gr->count - 1, NULL, &other);
     CHECK(r == HAIROBB_ERROR_MISMATCH && !other, "load_groups over fewer groups: %s", hairobb_result_string(r));
-    for (i = 0; loaded && i < rays; ++i) {
-        hairobb_ray ray;
-        hairobb_hit a, b;
-        int got_a, got_b;
-        memcpy(ray.org, org + 3 * i, sizeof ray.org);
-        memcpy(ray.dir, dir + 3 * i, sizeof ray.dir);
-        ray.tnear = 0.0f;
-        ray.tfar = INFINITY;
-        ray.time = 0.0f;
-        got_a = hairobb_intersect1(groups, &ray, &a);
-        got_b = hairobb_intersect1(loaded, &ray, &b);
-        hits += (size_t)got_a;
-        differ += !same_hit(got_a, &a, got_b, &b);
-    }
+    differ = trace_differ(groups, loaded, NULL, org, dir, rays, NULL, &hits);
     printf("save and load of %zu groups (%zu bytes): %zu rays, %zu hits, %zu differ\n", gr->count, size, rays, hits, differ);
     CHECK(differ == 0 && hits > rays / 4, "save and load: %zu differ", differ);
     hairobb_free(loaded);
