@@ -5106,6 +5106,7 @@ HAIROBB_DEF hairobb_result hairobb_build(const float *vertices, size_t vertex_co
     unsigned steps;
 
     if (out) *out = NULL;
+    memset(&opt, 0, sizeof opt);   /* read below even where the options were refused */
     result = hairobb__resolve_options(options, HAIROBB__FOR_BUILD, &opt);
     if (!out || (!vertices && opt.time_steps < 2) || !indices || segment_count == 0) return HAIROBB_ERROR_INVALID_ARGUMENT;
     if (result == HAIROBB_OK) result = hairobb__choose_simd(opt.simd, &simd);
@@ -6358,6 +6359,7 @@ static hairobb_result hairobb__load(const void *buffer, size_t size, const float
     int k;
 
     if (out) *out = NULL;
+    memset(&opt, 0, sizeof opt);   /* read below even where the options were refused */
     result = hairobb__resolve_options(options, HAIROBB__FOR_LOAD, &opt);
     if (!out || !in || (!vertices && opt.time_steps < 2) || !indices || segment_count == 0) return HAIROBB_ERROR_INVALID_ARGUMENT;
     if (result == HAIROBB_OK) result = hairobb__choose_simd(opt.simd, &simd);
