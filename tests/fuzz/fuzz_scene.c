@@ -369,7 +369,7 @@ static void check_scene_hit(const hairobb_scene *scene, const scene_input *s, co
    (ties to the lower instance), its occlusion theirs; for hair and rays
    (world and object) of moderate size (moderate_hair: beyond it a hit may
    lie outside its segment's box, and a BVH traced with a shorter tfar
-   miss it). */
+   miss it), and hits not on hair thinner than rounding (rounding_decided). */
 static void check_exact(const scene_input *s, const hairobb_ray *ray, uint32_t mask, int got, const hairobb_hit *hit, int occluded)
 {
     hairobb_hit best, h;
@@ -377,10 +377,10 @@ static void check_exact(const scene_input *s, const hairobb_ray *ray, uint32_t m
     size_t i;
     if (!moderate_ray(ray)) return;
     for (i = 0; i < s->count; ++i) {
-        const fuzz_hair *h = &s->hairs[s->hair_of[i]];
+        const fuzz_hair *hair = &s->hairs[s->hair_of[i]];
         hairobb_ray object;
         if (!masks_meet(s->instances[i].mask, mask)) continue;
-        if (!s->maps[i].exact || !moderate_hair(h->vertices, h->indices, h->segments, h->points)) return;
+        if (!s->maps[i].exact || !moderate_hair(hair->vertices, hair->indices, hair->segments, hair->points)) return;
         ray_to_object(&s->maps[i], ray, &object);
         if (!moderate_ray(&object)) return;
     }
@@ -395,6 +395,14 @@ static void check_exact(const scene_input *s, const hairobb_ray *ray, uint32_t m
         best = h;
         best.instance_id = (uint32_t)i;
         best_got = 1;
+    }
+    for (i = 0; i < 2; ++i) {
+        /* a hit on hair thinner than rounding: a box may keep it or not */
+        const hairobb_hit *one = i ? hit : &best;
+        hairobb_ray object;
+        if (!(i ? got : best_got)) continue;
+        ray_to_object(&s->maps[one->instance_id], ray, &object);
+        if (rounding_decided(s->instances[one->instance_id].bvh, &object, one)) return;
     }
     if (best_got != got || !same_place(&best, hit)) fuzz_fail("a scene's hit is not the nearest of its instances' own");
     if (any_occluded != occluded) fuzz_fail("a scene's occlusion is not its instances' own");
