@@ -233,14 +233,9 @@ static void compare_groups(const char *name, const grouped *gr, const hair_scene
     mask_context.user = &mf;
     mask_context.mask = 0;
     for (i = 0; i < rays; ++i) {
-        hairobb_ray ray;
+        hairobb_ray ray = ray_of(org, dir, i, 0.0f);
         hairobb_hit a, b, shown_hit;
         int got_a, got_b;
-        memcpy(ray.org, org + 3 * i, sizeof ray.org);
-        memcpy(ray.dir, dir + 3 * i, sizeof ray.dir);
-        ray.tnear = 0.0f;
-        ray.tfar = INFINITY;
-        ray.time = 0.0f;
         got_a = hairobb_intersect1(groups, &ray, &a);
         got_b = hairobb_intersect1(one, &ray, &b);
         if (got_b) map_ids(gr, &b);
@@ -539,14 +534,9 @@ static void test_instances(const grouped *gr, const float *org, const float *dir
     inst[1].transform[3] = 1000.0f;   /* far off: never in the way */
     CHECK(groups && hairobb_scene_build(inst, 2, NULL, &scene) == HAIROBB_OK, "instances: the scene builds");
     for (i = 0; scene && i < rays; ++i) {
-        hairobb_ray ray;
+        hairobb_ray ray = ray_of(org, dir, i, 0.0f);
         hairobb_hit a, b;
         int got_a, got_b;
-        memcpy(ray.org, org + 3 * i, sizeof ray.org);
-        memcpy(ray.dir, dir + 3 * i, sizeof ray.dir);
-        ray.tnear = 0.0f;
-        ray.tfar = INFINITY;
-        ray.time = 0.0f;
         got_a = hairobb_scene_intersect1(scene, NULL, NULL, &ray, &a);
         got_b = hairobb_intersect1(groups, &ray, &b);
         hits += (size_t)got_a;
