@@ -86,6 +86,7 @@
        hairobb_group_count      its group count (1 for hairobb_build's BVHs)
        hairobb_group_user       a group's user pointer
        hairobb_group_segments   a group's segment count
+       hairobb_get_group_stats  each group's segments, points, leaf references, bytes and shape
        hairobb_scene_build      a top level over instances of BVHs (maps, masks, user pointers)
        hairobb_scene_update     new maps, masks, users or BVHs for the same instances
        hairobb_scene_free       frees a scene (not its BVHs; NULL is ignored)
@@ -533,6 +534,17 @@
      groups (SAVE AND LOAD). A multi-group BVH
      traces as one BVH over the groups' arrays concatenated in group order
      does, hit for hit (tests/test_groups.c).
+     hairobb_get_group_stats gives each group's counts, its leaf
+     references and its share of hairobb_memory_bytes (what is held for
+     it alone, and the rest by its leaf references).
+     MIXED SHAPES: a group's shape (hairobb_group.shape) is options.shape
+     or its own, so fur as ribbons and close-up hair as tubes share one
+     tree; options.end_caps and back_faces apply to its tubes, and pieces
+     precision is refused where a group is round. Each segment is traced
+     as its group's shape, exactly as a BVH of that shape alone would (a
+     bit a segment marks the tubes; every BVH pays one predictable branch
+     a segment tested for it). The shapes are saved; a load takes them,
+     and refuses (MISMATCH) a group that asks for another.
      INSTANCES: a groom is often placed more than once. hairobb_scene_build(instances, count,
      allocator_user, &scene) puts BVHs under one top level: each
      hairobb_instance names a BVH (several may share one; the scene does
@@ -906,6 +918,13 @@ HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh);
    flyaways, brows...) as one tree, hits naming the group (hit.group_id)
    and the segment in it (hit.prim_id). Each group's arrays are as
    hairobb_build takes them, in options.basis. */
+/* A group's surface: options.shape, or its own, so that fur as ribbons
+   and close-up hair as tubes share one tree (MIXED SHAPES in SCENES). */
+typedef enum hairobb_group_shape {
+    HAIROBB_GROUP_SHAPE_OPTIONS = 0,   /* options.shape */
+    HAIROBB_GROUP_SHAPE_RIBBON,        /* HAIROBB_SHAPE_RIBBON whatever options.shape says */
+    HAIROBB_GROUP_SHAPE_ROUND          /* HAIROBB_SHAPE_ROUND whatever options.shape says */
+} hairobb_group_shape;
 typedef struct hairobb_group {
     const float *vertices;      /* vertex_count x (x, y, z, radius); NULL for moving hair (time_vertices) */
     size_t vertex_count;
@@ -915,6 +934,7 @@ typedef struct hairobb_group {
     const float *const *time_vertices;  /* motion blur: options.time_steps arrays of vertex_count points; else NULL */
     uint32_t mask;              /* traced by rays whose mask (hairobb_context.mask) shares a bit; 0 = every bit */
     void *user;                 /* given back by hairobb_group_user */
+    hairobb_group_shape shape;  /* HAIROBB_GROUP_SHAPE_OPTIONS (0): options.shape; or this group's own */
 } hairobb_group;
 /* One BVH over every segment of group_count groups (options for all of
    them; options.tangents and options.time_vertices are ignored: each
@@ -936,6 +956,18 @@ HAIROBB_DEF hairobb_result hairobb_refit_group(hairobb_bvh *bvh, uint32_t group_
 HAIROBB_DEF uint32_t hairobb_group_count(const hairobb_bvh *bvh);
 HAIROBB_DEF void *hairobb_group_user(const hairobb_bvh *bvh, uint32_t group_id);
 HAIROBB_DEF size_t hairobb_group_segments(const hairobb_bvh *bvh, uint32_t group_id);
+/* What each group holds and costs (hairobb_get_group_stats). */
+typedef struct hairobb_group_stats {
+    size_t segment_count, vertex_count;
+    size_t leaf_references;   /* its segments' entries in leaves (a spatial split lists a segment in several) */
+    size_t bytes;             /* its share of hairobb_memory_bytes: what the BVH holds for it alone (its points,
+                                 tangents, indices) and the rest in proportion to its leaf references; the groups'
+                                 shares add up to hairobb_memory_bytes */
+    hairobb_shape shape;      /* its segments' surface */
+} hairobb_group_stats;
+/* stats[g] for each group g below count and hairobb_group_count; returns
+   how many it wrote (0 for NULL). One pass over the leaves. */
+HAIROBB_DEF uint32_t hairobb_get_group_stats(const hairobb_bvh *bvh, hairobb_group_stats *stats, uint32_t count);
 
 /* Refit (see REFIT): the same segments at new positions (and radii),
    vertices as the build's (the same vertex_count and indices). The tree
@@ -1675,7 +1707,35 @@ struct hairobb_bvh {
     float *group_vertices, *group_tangents, *group_steps;   /* the concatenation: points, tangents, every step's points */
     uint32_t *group_indices;
     const float **group_step_list;    /* time_steps pointers into group_steps */
+    unsigned char *group_shape;       /* each group's hairobb_shape */
+    uint32_t *round_bits;             /* groups of both shapes (MIXED SHAPES): a bit a segment, set for a tube; else NULL */
 };
+
+/* The group of segment prim (>>groups): the last g with group_first[g] <=
+   prim, by halving (groups are few next to segments; only a hit's ids, a
+   mask that excludes groups, and joints and skips at group ends ask). 0
+   for hairobb_build's one group. */
+HAIROBB__INLINE uint32_t hairobb__group_of(const hairobb_bvh *bvh, uint32_t prim)
+{
+    uint32_t lo = 0, hi;
+    if (!bvh->group_first) return 0;
+    hi = bvh->group_count;   /* group_first[lo] <= prim < group_first[hi] */
+    while (hi - lo > 1) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (bvh->group_first[mid] <= prim) lo = mid;
+        else hi = mid;
+    }
+    return lo;
+}
+
+/* Whether segment prim is a tube: the BVH's shape, or where its groups
+   mix shapes, the segment's bit (a load and a predictable branch more
+   per segment for every BVH). */
+HAIROBB__INLINE int hairobb__is_tube(const hairobb_bvh *bvh, uint32_t prim)
+{
+    if (bvh->round_bits) return (int)((bvh->round_bits[prim >> 5] >> (prim & 31u)) & 1u);
+    return bvh->shape == HAIROBB_SHAPE_ROUND;
+}
 
 
 /* The Bezier control points of segment prim as traced at time: defined
@@ -5173,16 +5233,21 @@ static void hairobb__free_groups(hairobb_bvh *bvh)
     if (bvh->group_steps) HAIROBB_FREE(bvh->group_steps, user);
     if (bvh->group_indices) HAIROBB_FREE(bvh->group_indices, user);
     if (bvh->group_step_list) HAIROBB_FREE(HAIROBB__CAST(void *, bvh->group_step_list), user);
+    if (bvh->group_shape) HAIROBB_FREE(bvh->group_shape, user);
+    if (bvh->round_bits) HAIROBB_FREE(bvh->round_bits, user);
 }
+
+/* round_bits' words for n segments */
+static size_t hairobb__round_words(size_t n) { return (n + 31) / 32; }
 
 /* The bytes a multi-group BVH holds for its groups (hairobb_memory_bytes). */
 static size_t hairobb__group_bytes(const hairobb_bvh *bvh)
 {
     size_t points = 4 * sizeof(float) * bvh->vertex_count;
     if (!bvh->group_first) return 0;
-    return (size_t)bvh->group_count * (2 * sizeof(uint32_t) + sizeof(size_t) + sizeof(void *)) + sizeof(uint32_t) + sizeof(size_t) +
+    return (size_t)bvh->group_count * (2 * sizeof(uint32_t) + sizeof(size_t) + sizeof(void *) + 1) + sizeof(uint32_t) + sizeof(size_t) +
            (bvh->group_vertices ? points : 0) + (bvh->group_tangents ? points : 0) + bvh->time_steps * (points + sizeof(float *)) +
-           sizeof(uint32_t) * bvh->segment_count;
+           sizeof(uint32_t) * bvh->segment_count + (bvh->round_bits ? hairobb__round_words(bvh->segment_count) * sizeof(uint32_t) : 0);
 }
 
 HAIROBB_DEF void hairobb_free(hairobb_bvh *bvh)
@@ -5677,6 +5742,7 @@ static hairobb_result hairobb__check_groups(const hairobb_group *groups, size_t 
     for (g = 0; g < group_count; ++g) {
         const hairobb_group *group = &groups[g];
         if (group->segment_count == 0) continue;
+        if ((unsigned)group->shape > HAIROBB_GROUP_SHAPE_ROUND) return HAIROBB_ERROR_INVALID_ARGUMENT;
         if (!group->indices || (steps ? !group->time_vertices : !group->vertices) ||
             (opt->basis == HAIROBB_BASIS_HERMITE) != (group->tangents != NULL))
             return HAIROBB_ERROR_INVALID_ARGUMENT;
@@ -5720,6 +5786,7 @@ static hairobb_result hairobb__take_groups(const hairobb_group *groups, size_t g
     scratch->group_mask = HAIROBB__CAST(uint32_t *, HAIROBB_MALLOC(group_count * sizeof(uint32_t), user));
     scratch->vertex_first = HAIROBB__CAST(size_t *, HAIROBB_MALLOC((group_count + 1) * sizeof(size_t), user));
     scratch->group_user = HAIROBB__CAST(void **, HAIROBB_MALLOC(group_count * sizeof(void *), user));
+    scratch->group_shape = HAIROBB__CAST(unsigned char *, HAIROBB_MALLOC(group_count, user));
     scratch->group_indices = HAIROBB__CAST(uint32_t *, hairobb__malloc_large(segment_total * sizeof(uint32_t), user));
     if (!steps) scratch->group_vertices = HAIROBB__CAST(float *, hairobb__malloc_large(points_bytes ? points_bytes : 16, user));
     if (opt->basis == HAIROBB_BASIS_HERMITE)
@@ -5728,7 +5795,8 @@ static hairobb_result hairobb__take_groups(const hairobb_group *groups, size_t g
         scratch->group_steps = HAIROBB__CAST(float *, hairobb__malloc_large(steps * points_bytes, user));
         scratch->group_step_list = HAIROBB__CAST(const float **, HAIROBB_MALLOC(steps * sizeof(float *), user));
     }
-    if (!scratch->group_first || !scratch->group_mask || !scratch->vertex_first || !scratch->group_user || !scratch->group_indices ||
+    if (!scratch->group_first || !scratch->group_mask || !scratch->vertex_first || !scratch->group_user || !scratch->group_shape ||
+        !scratch->group_indices ||
         (!steps && !scratch->group_vertices) || (opt->basis == HAIROBB_BASIS_HERMITE && !scratch->group_tangents) ||
         (steps && (!scratch->group_steps || !scratch->group_step_list))) {
         hairobb__free_groups(scratch);
@@ -5746,6 +5814,7 @@ static hairobb_result hairobb__take_groups(const hairobb_group *groups, size_t g
         scratch->group_mask[g] = group->mask ? group->mask : 0xffffffffu;
         scratch->group_mask_and &= scratch->group_mask[g];
         scratch->group_user[g] = group->user;
+        scratch->group_shape[g] = (unsigned char)group->shape;   /* as asked: hairobb__group_shapes resolves it */
         for (i = 0; i < group->segment_count; ++i) scratch->group_indices[base + i] = group->indices[i] + (uint32_t)first;
         if (!n) continue;
         if (!steps) memcpy(hairobb__group_points(scratch, (uint32_t)g, -1), group->vertices, 4 * sizeof(float) * n);
@@ -5755,6 +5824,41 @@ static hairobb_result hairobb__take_groups(const hairobb_group *groups, size_t g
     for (k = 0; k < steps; ++k) scratch->group_step_list[k] = scratch->group_steps + 4 * vertex_total * (size_t)k;
     opt->tangents = scratch->group_tangents;
     opt->time_vertices = steps ? scratch->group_step_list : NULL;
+    return HAIROBB_OK;
+}
+
+/* Each group's shape as asked (HAIROBB_GROUP_SHAPE_*, in group_shape since
+   hairobb__take_groups) resolved against `shape`, options.shape at a
+   build. Returns whether a group with segments is round. */
+static int hairobb__group_shapes(hairobb_bvh *scratch, hairobb_shape shape)
+{
+    uint32_t g;
+    int round = 0;
+    for (g = 0; g < scratch->group_count; ++g) {
+        unsigned asked = scratch->group_shape[g];
+        scratch->group_shape[g] = (unsigned char)(asked == HAIROBB_GROUP_SHAPE_ROUND   ? HAIROBB_SHAPE_ROUND
+                                                  : asked == HAIROBB_GROUP_SHAPE_RIBBON ? HAIROBB_SHAPE_RIBBON
+                                                                                        : shape);
+        if (scratch->group_shape[g] == HAIROBB_SHAPE_ROUND && scratch->group_first[g + 1] > scratch->group_first[g]) round = 1;
+    }
+    return round;
+}
+
+/* round_bits, where the groups with segments are of both shapes (MIXED
+   SHAPES): OUT_OF_MEMORY or OK. */
+static hairobb_result hairobb__group_round_bits(hairobb_bvh *scratch)
+{
+    uint32_t g, s, seen = 0;
+    size_t words = hairobb__round_words(scratch->segment_count);
+    for (g = 0; g < scratch->group_count; ++g)
+        if (scratch->group_first[g + 1] > scratch->group_first[g]) seen |= 1u << scratch->group_shape[g];
+    if (seen != 3u) return HAIROBB_OK;
+    scratch->round_bits = HAIROBB__CAST(uint32_t *, hairobb__malloc_large(words * sizeof(uint32_t), scratch->allocator_user));
+    if (!scratch->round_bits) return HAIROBB_ERROR_OUT_OF_MEMORY;
+    memset(scratch->round_bits, 0, words * sizeof(uint32_t));
+    for (g = 0; g < scratch->group_count; ++g)
+        if (scratch->group_shape[g] == HAIROBB_SHAPE_ROUND)
+            for (s = scratch->group_first[g]; s < scratch->group_first[g + 1]; ++s) scratch->round_bits[s >> 5] |= 1u << (s & 31u);
     return HAIROBB_OK;
 }
 
@@ -5772,6 +5876,8 @@ static void hairobb__attach_groups(hairobb_bvh *bvh, const hairobb_bvh *scratch)
     bvh->group_steps = scratch->group_steps;
     bvh->group_indices = scratch->group_indices;
     bvh->group_step_list = scratch->group_step_list;
+    bvh->group_shape = scratch->group_shape;
+    bvh->round_bits = scratch->round_bits;
     if (bvh->copy_points && bvh->point_basis == HAIROBB_BASIS_BEZIER) {
         /* the copy holds every segment's points: a refit gathers the
            groups' points from it (hairobb_refit_group), so the
@@ -5791,9 +5897,15 @@ HAIROBB_DEF hairobb_result hairobb_build_groups(const hairobb_group *groups, siz
     hairobb_result result;
     if (out) *out = NULL;
     if (!out) return HAIROBB_ERROR_INVALID_ARGUMENT;
+    if ((unsigned)opt.shape > HAIROBB_SHAPE_ROUND) return HAIROBB_ERROR_INVALID_ARGUMENT;
     result = hairobb__take_groups(groups, group_count, &opt, &scratch);
     if (result != HAIROBB_OK) return result;
-    result = hairobb_build(scratch.group_vertices, scratch.vertex_count, scratch.group_indices, scratch.segment_count, &opt, out);
+    /* a BVH with a round group builds as round (its caps and culling);
+       segments read their own shape where groups mix them */
+    opt.shape = hairobb__group_shapes(&scratch, opt.shape) ? HAIROBB_SHAPE_ROUND : HAIROBB_SHAPE_RIBBON;
+    result = hairobb__group_round_bits(&scratch);
+    if (result == HAIROBB_OK)
+        result = hairobb_build(scratch.group_vertices, scratch.vertex_count, scratch.group_indices, scratch.segment_count, &opt, out);
     if (result != HAIROBB_OK) {
         hairobb__free_groups(&scratch);
         return result;
@@ -5880,6 +5992,50 @@ HAIROBB_DEF size_t hairobb_group_segments(const hairobb_bvh *bvh, uint32_t group
     return group_id < bvh->group_count ? (size_t)(bvh->group_first[group_id + 1] - bvh->group_first[group_id]) : 0;
 }
 
+HAIROBB_DEF uint32_t hairobb_get_group_stats(const hairobb_bvh *bvh, hairobb_group_stats *stats, uint32_t count)
+{
+    uint32_t groups = hairobb_group_count(bvh), g;
+    size_t i, own_total = 0, shared, references = 0, total = hairobb_memory_bytes(bvh), share_before = 0;
+    size_t points = bvh && bvh->group_first ? (bvh->group_vertices ? 1u : 0u) + (bvh->group_tangents ? 1u : 0u) + bvh->time_steps : 0;
+    if (!bvh || !stats) return 0;
+    if (count > groups) count = groups;
+    if (!bvh->group_first) {   /* one group: everything */
+        if (count == 0) return 0;
+        stats[0].segment_count = bvh->segment_count;
+        stats[0].vertex_count = bvh->vertex_count;
+        stats[0].leaf_references = bvh->leaf_prim_count;
+        stats[0].bytes = total;
+        stats[0].shape = bvh->shape;
+        return 1;
+    }
+    for (g = 0; g < count; ++g) stats[g].leaf_references = 0;
+    for (i = 0; i < bvh->leaf_prim_count; ++i) {
+        uint32_t group = hairobb__group_of(bvh, bvh->leaf_prims[i]);
+        if (group < count) ++stats[group].leaf_references;
+    }
+    /* what is held for each group alone: its points (static, tangents,
+       every step: 16 bytes a point each) and its indices (4 a segment) */
+    for (g = 0; g < groups; ++g) {
+        size_t segments = bvh->group_first[g + 1] - bvh->group_first[g], vertices = bvh->vertex_first[g + 1] - bvh->vertex_first[g];
+        own_total += points * 4 * sizeof(float) * vertices + sizeof(uint32_t) * segments;
+    }
+    shared = total - own_total;
+    for (g = 0; g < count; ++g) {
+        size_t segments = bvh->group_first[g + 1] - bvh->group_first[g], vertices = bvh->vertex_first[g + 1] - bvh->vertex_first[g];
+        size_t share_after;
+        references += stats[g].leaf_references;
+        /* the shared bytes by cumulative references: the shares add up */
+        share_after = (size_t)((double)shared * (double)references / (double)bvh->leaf_prim_count);
+        if (g + 1 == groups) share_after = shared;
+        stats[g].segment_count = segments;
+        stats[g].vertex_count = vertices;
+        stats[g].bytes = points * 4 * sizeof(float) * vertices + sizeof(uint32_t) * segments + (share_after - share_before);
+        stats[g].shape = (hairobb_shape)bvh->group_shape[g];
+        share_before = share_after;
+    }
+    return count;
+}
+
 /* ------------------------------------------------------------------------ */
 /* >>save_load  Save and load                                               */
 /* ------------------------------------------------------------------------ */
@@ -5892,6 +6048,9 @@ HAIROBB_DEF size_t hairobb_group_segments(const hairobb_bvh *bvh, uint32_t group
      where flags has HAIROBB__SAVE_GROUPS (a multi-group BVH, format 3 on):
      the group count G (8 bytes), each group's first segment (G + 1 of 4
      bytes, then zeros to a multiple of 8) and first vertex (G + 1 of 8);
+     where flags has HAIROBB__SAVE_SHAPES too (groups of both shapes): each
+     group's hairobb_shape, G bytes, then zeros to a multiple of 8 (without
+     it every group is the header's shape);
      a checksum of every byte before it (hairobb__hash), 8 bytes.
    The hair hash (hairobb__traced_hash) covers the Bezier segments the BVH
    traces, read from the BVH's own copy where it has one, so that a
@@ -5906,6 +6065,7 @@ HAIROBB_DEF size_t hairobb_group_segments(const hairobb_bvh *bvh, uint32_t group
 #define HAIROBB__SAVE_HEADER 128
 #define HAIROBB__SAVE_RANGES 1u         /* leaf_ranges follow leaf_prims */
 #define HAIROBB__SAVE_GROUPS 2u         /* the groups' section follows (format 3 on) */
+#define HAIROBB__SAVE_SHAPES 4u         /* with HAIROBB__SAVE_GROUPS: the groups' shapes follow it */
 #define HAIROBB__AT_VERSION 8           /* uint32 each ... */
 #define HAIROBB__AT_BYTE_ORDER 12
 #define HAIROBB__AT_WIDTH 16
@@ -6047,18 +6207,20 @@ static uint64_t hairobb__get64(const unsigned char *at) { uint64_t v; memcpy(&v,
 /* leaf_prims' bytes in the format: a multiple of 8 */
 static size_t hairobb__saved_leaf_bytes(size_t leaf_prim_count) { return (sizeof(uint32_t) * leaf_prim_count + 7) & ~(size_t)7; }
 
-/* the groups' section's bytes, for G groups */
+/* the groups' section's bytes, for G groups, and the shapes' after it */
 static size_t hairobb__saved_group_bytes(uint64_t groups)
 {
     return (size_t)(8 + (((groups + 1) * sizeof(uint32_t) + 7) & ~(uint64_t)7) + 8 * (groups + 1));
 }
+static size_t hairobb__saved_shape_bytes(uint64_t groups) { return (size_t)((groups + 7) & ~(uint64_t)7); }
 
 HAIROBB_DEF size_t hairobb_save_size(const hairobb_bvh *bvh)
 {
     if (!bvh) return 0;
     return HAIROBB__SAVE_HEADER + bvh->node_bytes + hairobb__saved_leaf_bytes(bvh->leaf_prim_count) +
            (bvh->leaf_ranges ? 2 * sizeof(float) * bvh->leaf_prim_count : 0) +
-           (bvh->group_first ? hairobb__saved_group_bytes(bvh->group_count) : 0) + 8;
+           (bvh->group_first ? hairobb__saved_group_bytes(bvh->group_count) : 0) +
+           (bvh->round_bits ? hairobb__saved_shape_bytes(bvh->group_count) : 0) + 8;
 }
 
 HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, size_t size)
@@ -6079,7 +6241,8 @@ HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, si
     hairobb__put32(out + HAIROBB__AT_MAX_LEAF, bvh->max_leaf_size);
     hairobb__put32(out + HAIROBB__AT_POLICY, (uint32_t)bvh->policy);
     hairobb__put32(out + HAIROBB__AT_FLAGS,
-                   (bvh->leaf_ranges ? HAIROBB__SAVE_RANGES : 0u) | (bvh->group_first ? HAIROBB__SAVE_GROUPS : 0u));
+                   (bvh->leaf_ranges ? HAIROBB__SAVE_RANGES : 0u) | (bvh->group_first ? HAIROBB__SAVE_GROUPS : 0u) |
+                       (bvh->round_bits ? HAIROBB__SAVE_SHAPES : 0u));
     hairobb__put64(out + HAIROBB__AT_SEGMENTS, bvh->segment_count);
     hairobb__put64(out + HAIROBB__AT_VERTICES, hairobb__traced_vertex_count(bvh));
     hairobb__put64(out + HAIROBB__AT_HAIR_HASH, hairobb__traced_hash(bvh, HAIROBB__SAVE_VERSION));
@@ -6114,6 +6277,11 @@ HAIROBB_DEF hairobb_result hairobb_save(const hairobb_bvh *bvh, void *buffer, si
             hairobb__put64(out + 8 + first_bytes + 8 * (size_t)g, bvh->vertex_first[g]);
         }
         out += hairobb__saved_group_bytes(bvh->group_count);
+        if (bvh->round_bits) {
+            memset(out, 0, hairobb__saved_shape_bytes(bvh->group_count));
+            memcpy(out, bvh->group_shape, bvh->group_count);
+            out += hairobb__saved_shape_bytes(bvh->group_count);
+        }
     }
     hairobb__put64(out, hairobb__save_checksum(HAIROBB__CAST(unsigned char *, buffer), total));
     return HAIROBB_OK;
@@ -6195,7 +6363,7 @@ typedef struct hairobb__saved {
     uint64_t node_bytes, leaf_prim_count, segments;
     size_t leaf_bytes, range_bytes;
     uint64_t groups;                  /* a multi-group BVH's group count, its section at group_at; 0: none */
-    size_t group_at;
+    size_t group_at, shapes_at;       /* shapes_at: the groups' shapes (HAIROBB__SAVE_SHAPES), else 0 */
     uint32_t version, basis, steps;
     hairobb__tree_settings tree;      /* set once the header's words are in range */
 } hairobb__saved;
@@ -6224,7 +6392,9 @@ static hairobb_result hairobb__read_saved(const unsigned char *in, size_t size, 
     /* no overflow: below size */
     saved->range_bytes = flags & HAIROBB__SAVE_RANGES ? 2 * sizeof(float) * (size_t)saved->leaf_prim_count : 0;
     saved->groups = 0;
-    if (flags > (saved->version >= 3u ? HAIROBB__SAVE_RANGES | HAIROBB__SAVE_GROUPS : HAIROBB__SAVE_RANGES) ||
+    saved->shapes_at = 0;
+    if (flags > (saved->version >= 3u ? HAIROBB__SAVE_RANGES | HAIROBB__SAVE_GROUPS | HAIROBB__SAVE_SHAPES : HAIROBB__SAVE_RANGES) ||
+        ((flags & HAIROBB__SAVE_SHAPES) && !(flags & HAIROBB__SAVE_GROUPS)) ||
         saved->leaf_bytes + saved->range_bytes > size - HAIROBB__SAVE_HEADER - 8 - (size_t)saved->node_bytes)
         return HAIROBB_ERROR_INVALID_FILE;
     saved->group_at = HAIROBB__SAVE_HEADER + (size_t)saved->node_bytes + saved->leaf_bytes + saved->range_bytes;
@@ -6232,8 +6402,14 @@ static hairobb_result hairobb__read_saved(const unsigned char *in, size_t size, 
         if (size - 8 - saved->group_at < 8) return HAIROBB_ERROR_INVALID_FILE;
         saved->groups = hairobb__get64(in + saved->group_at);
         if (saved->groups == 0 || saved->groups > (size - 8 - saved->group_at) / 12 ||
-            hairobb__saved_group_bytes(saved->groups) != size - 8 - saved->group_at)
+            hairobb__saved_group_bytes(saved->groups) + (flags & HAIROBB__SAVE_SHAPES ? hairobb__saved_shape_bytes(saved->groups) : 0) !=
+                size - 8 - saved->group_at)
             return HAIROBB_ERROR_INVALID_FILE;
+        if (flags & HAIROBB__SAVE_SHAPES) {   /* each a shape, the padding zero */
+            saved->shapes_at = saved->group_at + hairobb__saved_group_bytes(saved->groups);
+            for (i = 0; i < hairobb__saved_shape_bytes(saved->groups); ++i)
+                if (in[saved->shapes_at + i] > (i < saved->groups ? (unsigned)HAIROBB_SHAPE_ROUND : 0u)) return HAIROBB_ERROR_INVALID_FILE;
+        }
     } else if (saved->group_at != size - 8) {
         return HAIROBB_ERROR_INVALID_FILE;
     }
@@ -6251,7 +6427,8 @@ static hairobb_result hairobb__read_saved(const unsigned char *in, size_t size, 
         (shape_word = hairobb__get32(in + HAIROBB__AT_SHAPE)) > (HAIROBB_SHAPE_ROUND | HAIROBB__SAVE_CAPS | HAIROBB__SAVE_CULL) ||
         (shape = shape_word & 0xffu) > HAIROBB_SHAPE_ROUND || (shape != HAIROBB_SHAPE_ROUND && shape_word != shape) ||
         (shape == HAIROBB_SHAPE_ROUND && precision == HAIROBB_PRECISION_PIECES) ||
-        saved->segments == 0 || saved->leaf_prim_count == 0 || saved->node_bytes % 16 != 0)
+        saved->segments == 0 || saved->leaf_prim_count == 0 || saved->node_bytes % 16 != 0 ||
+        (saved->shapes_at && shape != HAIROBB_SHAPE_ROUND))   /* groups of both shapes build as round */
         return HAIROBB_ERROR_INVALID_FILE;
     for (i = HAIROBB__SAVE_HEADER + (size_t)saved->node_bytes + sizeof(uint32_t) * (size_t)saved->leaf_prim_count;
          i < HAIROBB__SAVE_HEADER + (size_t)saved->node_bytes + saved->leaf_bytes; ++i)
@@ -6432,6 +6609,21 @@ HAIROBB_DEF hairobb_result hairobb_load_groups(const void *buffer, size_t size, 
             if (hairobb__get32(in + 8 + 4 * g) != scratch.group_first[g] ||
                 hairobb__get64(in + 8 + first_bytes + 8 * g) != (uint64_t)scratch.vertex_first[g])
                 result = HAIROBB_ERROR_MISMATCH;
+        /* the saved shapes: a group with segments that asks for its own
+           must have it (an empty one's is moot, so as asked) */
+        for (g = 0; result == HAIROBB_OK && g < group_count; ++g) {
+            unsigned asked = scratch.group_shape[g];
+            hairobb_shape shape = saved.shapes_at ? (hairobb_shape)((const unsigned char *)buffer)[saved.shapes_at + g] : (*out)->shape;
+            if (asked != HAIROBB_GROUP_SHAPE_OPTIONS &&
+                asked != (shape == HAIROBB_SHAPE_ROUND ? (unsigned)HAIROBB_GROUP_SHAPE_ROUND : (unsigned)HAIROBB_GROUP_SHAPE_RIBBON)) {
+                if (scratch.group_first[g + 1] > scratch.group_first[g]) result = HAIROBB_ERROR_MISMATCH;
+                shape = asked == HAIROBB_GROUP_SHAPE_ROUND ? HAIROBB_SHAPE_ROUND : HAIROBB_SHAPE_RIBBON;
+            }
+            scratch.group_shape[g] = (unsigned char)shape;
+        }
+        if (result == HAIROBB_OK) result = hairobb__group_round_bits(&scratch);
+        /* shapes are saved only where groups with segments mix them */
+        if (result == HAIROBB_OK && saved.shapes_at && !scratch.round_bits) result = HAIROBB_ERROR_INVALID_FILE;
     }
     if (result != HAIROBB_OK) {
         hairobb_free(*out);
@@ -6720,7 +6912,7 @@ static int hairobb__ray_setup_from(hairobb__ray_state *rs, const hairobb_bvh *bv
        `from` gives) an exit, a ray going in an entry. Only that sheet is
        skipped within the band, so a ray going in finds the fibre's far
        side. */
-    if (bvh->shape == HAIROBB_SHAPE_ROUND) rs->skip_sheet = hairobb__dot3(ray->dir, from->Ng) > 0.0f ? -1.0f : 1.0f;
+    if (hairobb__is_tube(bvh, prim)) rs->skip_sheet = hairobb__dot3(ray->dir, from->Ng) > 0.0f ? -1.0f : 1.0f;
     rs->skip_prim = prim;
     memcpy(rs->skip_first, cp, sizeof rs->skip_first);
     memcpy(rs->skip_last, cp + 12, sizeof rs->skip_last);
@@ -7134,23 +7326,6 @@ HAIROBB__INLINE const float *hairobb__segment_points(const hairobb_bvh *bvh, uin
     /* likely: the default's copy, the other paths out of its way */
     if (HAIROBB__LIKELY(bvh->leaf_points != NULL)) return bvh->leaf_points + 16 * (size_t)bvh->point_refs[prim];
     return hairobb__points_at(bvh, 4 * (size_t)bvh->indices[prim], time, scratch);
-}
-
-/* The group of segment prim (>>groups): the last g with group_first[g] <=
-   prim, by halving (groups are few next to segments; only a hit's ids, a
-   mask that excludes groups, and joints and skips at group ends ask). 0
-   for hairobb_build's one group. */
-HAIROBB__INLINE uint32_t hairobb__group_of(const hairobb_bvh *bvh, uint32_t prim)
-{
-    uint32_t lo = 0, hi;
-    if (!bvh->group_first) return 0;
-    hi = bvh->group_count;   /* group_first[lo] <= prim < group_first[hi] */
-    while (hi - lo > 1) {
-        uint32_t mid = lo + (hi - lo) / 2;
-        if (bvh->group_first[mid] <= prim) lo = mid;
-        else hi = mid;
-    }
-    return lo;
 }
 
 /* Whether segments prim and prim + 1 (next) or prim - 1 are of one group:
@@ -8592,7 +8767,7 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
     hairobb__ray_curve c;
     hairobb__v4 qx, qy, qz, x, y, z, r, reach, neg_reach;
     float max_r, magnitude;
-    int inside;
+    int inside, tube = hairobb__is_tube(bvh, prim);
     HAIROBB__COUNT(segment);
     hairobb__ray_points_v4(rs->org, cp, &qx, &qy, &qz, &r);
     x = hairobb__ray_row_v4(rs, 0, qx, qy, qz);
@@ -8626,7 +8801,7 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
         float slack = hairobb__v4_hmax(hairobb__v4_abs(z)) * HAIROBB__Z_SLACK;
         float z_near = rs->tnear * rs->dir_length, z_far = rs->tfar * rs->dir_length;
         hairobb__v4 d;
-        if (bvh->shape == HAIROBB_SHAPE_ROUND) slack += max_r;   /* a tube's sheets lie within r of its centre line's depth */
+        if (tube) slack += max_r;   /* a tube's sheets lie within r of its centre line's depth */
         z_near -= fabsf(z_near) * (8.0f * FLT_EPSILON) + slack;
         z_far += fabsf(z_far) * (8.0f * FLT_EPSILON) + slack;
         magnitude = hairobb__v4_hmax(hairobb__v4_max(hairobb__v4_abs(x), hairobb__v4_abs(y)));
@@ -8640,7 +8815,7 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
     hairobb__v4_store(c.z, z);
     hairobb__v4_store(c.r, r);
     HAIROBB__COUNT(segment_passed);
-    if (bvh->shape == HAIROBB_SHAPE_ROUND) {
+    if (tube) {
         /* A tube's points again, relative to the point of the ray at the
            depth of the segment's ends (as Embree's round curves): relative
            to a far origin the depth and the offsets from the ray carried a
@@ -8792,7 +8967,7 @@ static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs
 {
     float scratch[16];
     const float *cp = points ? points : hairobb__segment_points(bvh, prim, rs->time, scratch);
-    if (bvh->shape == HAIROBB_SHAPE_ROUND) {
+    if (hairobb__is_tube(bvh, prim)) {
         hairobb__tube_hit_at(rs, cp, u, t, cap, hit);
         hit->t = t;
         hit->u = u;
@@ -8887,7 +9062,7 @@ static int hairobb__hit_filtered_out(hairobb__ray_state *rs, uint32_t prim, floa
     hairobb__v4_store(c.r, r);
     /* the hit first: a tube's side is its normal's (a ribbon's faces the ray) */
     hairobb__hit_at(rs->bvh, rs, prim, NULL, &c, u, t, rs->cap_candidate, &hit);
-    exit = rs->bvh->shape == HAIROBB_SHAPE_ROUND && hairobb__dot3(hit.Ng, rs->dir) > 0.0f;
+    exit = hairobb__is_tube(rs->bvh, prim) && hairobb__dot3(hit.Ng, rs->dir) > 0.0f;
     if (hairobb__ignored_before(rs, prim, u, t, exit, cp)) return 1;
     if (rs->placed) hairobb__hit_to_world(rs->placed, rs->instance_id, &hit);
     if ((!rs->hit_filter || rs->hit_filter(rs->hit_filter_user, rs->ray, &hit)) &&
@@ -9491,7 +9666,6 @@ HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairob
 #define hairobb__ribbon_f_v8 hairobb__ribbon_f_v8_avx2
 #define hairobb__segment_points hairobb__segment_points_avx2
 #define hairobb__skipped hairobb__skipped_avx2
-#define hairobb__group_of hairobb__group_of_avx2
 #define hairobb__same_group hairobb__same_group_avx2
 #define hairobb__hit_ids hairobb__hit_ids_avx2
 #define hairobb__solve_bracketed hairobb__solve_bracketed_avx2

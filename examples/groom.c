@@ -1,6 +1,7 @@
 /* groom.c - a groom of three hair groups in one BVH (hairobb_build_groups):
    a scalp's hair, flyaways over it and a fringe, each in arrays of its own
-   with its own shader (the user pointer) and mask bits. Camera rays see
+   with its own shader (the user pointer) and mask bits; the fringe, seen
+   close up, as round tubes, the rest as flat ribbons (MIXED SHAPES). Camera rays see
    every group; shadow rays skip the flyaways (a renderer's "casts no
    shadow" flag, as a mask); then the flyaways move (hairobb_refit_group)
    and the picture is traced again. Prints what each group was hit by;
@@ -98,13 +99,21 @@ int main(void)
         groups[g].time_vertices = NULL;
         groups[g].mask = g == 1 ? CAMERA : CAMERA | SHADOW;   /* flyaways cast no shadow */
         groups[g].user = &shaders[g];
+        groups[g].shape = g == 2 ? HAIROBB_GROUP_SHAPE_ROUND : HAIROBB_GROUP_SHAPE_OPTIONS;   /* options: ribbons */
     }
     result = hairobb_build_groups(groups, 3, NULL, &bvh);
     if (result != HAIROBB_OK) {
         fprintf(stderr, "hairobb_build_groups: %s\n", hairobb_result_string(result));
         return 1;
     }
-    printf("one BVH over %u groups: %zu bytes\n", hairobb_group_count(bvh), hairobb_memory_bytes(bvh));
+    {
+        hairobb_group_stats stats[3];
+        uint32_t n = hairobb_get_group_stats(bvh, stats, 3), k;
+        printf("one BVH over %u groups: %zu bytes\n", hairobb_group_count(bvh), hairobb_memory_bytes(bvh));
+        for (k = 0; k < n; ++k)
+            printf("  %-9s %s, %zu leaf references, %zu bytes\n", shaders[k].name,
+                   stats[k].shape == HAIROBB_SHAPE_ROUND ? "tubes  " : "ribbons", stats[k].leaf_references, stats[k].bytes);
+    }
     int seen = trace(bvh, "as built");
     /* wind on the flyaways: their new points, copied into the BVH, which refits */
     moved = (float *)malloc(sizeof(float) * 4 * groups[1].vertex_count);

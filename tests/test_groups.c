@@ -17,6 +17,12 @@
      was. Motion blur (2 steps): the same hits at ray times 0, 0.3, 1.
    - Instances: a scene over a multi-group BVH gives its hits with
      instance_id.
+   - Mixed shapes: ribbon and tube groups in one BVH trace as the nearer
+     of the same groups' ribbon BVH and tube BVH (each shown only its own
+     groups' hits), bounces and save/load too; a load asking another
+     shape is refused; an empty group's shape changes nothing.
+   - Group stats: counts as given, leaf references and bytes adding up to
+     the BVH's.
    - Bad input: no groups, NULL arrays, an index past its own group's
      points (INDEX_OUT_OF_RANGE even where the concatenation would reach
      the next group), NaN; an empty group is never hit; failed
@@ -417,6 +423,235 @@ static void test_save_load(const grouped *gr, const float *org, const float *dir
     }
 }
 
+/* A filter on a one-shape BVH over the same groups: takes only the hits
+   of the groups of that shape (user: a shape_filter). */
+typedef struct shape_filter {
+    const hairobb_group_shape *shapes;
+    hairobb_group_shape shape;
+} shape_filter;
+
+static int shape_filter_fn(void *user, const hairobb_ray *ray, const hairobb_hit *hit)
+{
+    const shape_filter *f = (const shape_filter *)user;
+    (void)ray;
+    return f->shapes[hit->group_id] == f->shape;
+}
+
+/* The nearer of a ribbon BVH's and a tube BVH's hits (each filtered to
+   its own groups): what a BVH mixing the two shapes must find. On a tie
+   in t either is right: *either says so. */
+static int nearer_of(int got_r, const hairobb_hit *hr, int got_t, const hairobb_hit *ht, hairobb_hit *out, int *either)
+{
+    *either = got_r && got_t && hr->t == ht->t;
+    if (got_r && (!got_t || hr->t < ht->t)) { *out = *hr; return 1; }
+    if (got_t) { *out = *ht; return 1; }
+    return 0;
+}
+
+/* MIXED SHAPES: groups 0, 2 as ribbons and 1, 3 as tubes (caps on) in one
+   BVH, against the same groups as one ribbon BVH and one tube BVH (each
+   checked against one BVH by compare_groups; groups, not one BVH, so that
+   joints and _from's skips end at groups as in the mixed BVH), each shown
+   only its own groups' hits: the nearer of the two, bit for bit;
+   occluded1; a bounce from each hit (_from); save and load (the shapes
+   saved; a load asking another shape is MISMATCH); a bad shape and tubes
+   in pieces precision refused; group stats name the shapes. */
+static void test_mixed_shapes(const grouped *gr_in, const float *org, const float *dir, size_t rays)
+{
+    grouped gr = *gr_in, as_ribbons, as_tubes;   /* shallow: only the shapes change */
+    hairobb_group_shape shapes[MAX_GROUPS];
+    hairobb_build_options o = hairobb_default_options(), round_options;
+    hairobb_bvh *mixed = NULL, *ribbons = NULL, *tubes = NULL, *loaded = NULL, *other = NULL;
+    shape_filter fr, ft;
+    hairobb_context cr, ct;
+    hairobb_group_stats stats[MAX_GROUPS + 1];
+    size_t i, g, hits = 0, differ = 0, occluded_differ = 0, bounce_differ = 0, bounces = 0, tube_hits = 0, loaded_differ = 0;
+    size_t size;
+    unsigned char *bytes = NULL;
+    hairobb_result r;
+    for (g = 0; g < gr.count; ++g) {
+        shapes[g] = g % 2 ? HAIROBB_GROUP_SHAPE_ROUND : HAIROBB_GROUP_SHAPE_RIBBON;
+        gr.group[g].shape = shapes[g];
+    }
+    o.end_caps = HAIROBB_ON;
+    round_options = o;
+    round_options.shape = HAIROBB_SHAPE_ROUND;
+    r = hairobb_build_groups(gr.group, gr.count, &o, &mixed);
+    CHECK(r == HAIROBB_OK, "mixed shapes: builds: %s", hairobb_result_string(r));
+    as_ribbons = as_tubes = gr;
+    for (g = 0; g < gr.count; ++g) {
+        as_ribbons.group[g].shape = HAIROBB_GROUP_SHAPE_OPTIONS;
+        as_tubes.group[g].shape = HAIROBB_GROUP_SHAPE_OPTIONS;
+    }
+    CHECK(hairobb_build_groups(as_ribbons.group, gr.count, &o, &ribbons) == HAIROBB_OK &&
+              hairobb_build_groups(as_tubes.group, gr.count, &round_options, &tubes) == HAIROBB_OK,
+          "mixed shapes: the one-shape BVHs");
+    if (!mixed || !ribbons || !tubes) return;
+    fr.shapes = ft.shapes = shapes;
+    fr.shape = HAIROBB_GROUP_SHAPE_RIBBON;
+    ft.shape = HAIROBB_GROUP_SHAPE_ROUND;
+    cr.filter = shape_filter_fn;
+    cr.user = &fr;
+    ct.filter = shape_filter_fn;
+    ct.user = &ft;
+    cr.mask = ct.mask = 0;
+    size = hairobb_save_size(mixed);
+    bytes = (unsigned char *)malloc(size);
+    CHECK(bytes && hairobb_save(mixed, bytes, size) == HAIROBB_OK, "mixed shapes: saved");
+    r = hairobb_load_groups(bytes, size, gr.group, gr.count, NULL, &loaded);
+    CHECK(r == HAIROBB_OK, "mixed shapes: load_groups: %s", hairobb_result_string(r));
+    for (i = 0; i < rays; ++i) {
+        hairobb_ray ray = ray_of(org, dir, i, 0.0f);
+        hairobb_hit hm, hr, ht, want, hl;
+        int got_m = hairobb_intersect1(mixed, &ray, &hm), got_r = hairobb_intersect1_context(ribbons, &cr, NULL, &ray, &hr);
+        int got_t = hairobb_intersect1_context(tubes, &ct, NULL, &ray, &ht), either, got_w, got_l;
+        got_w = nearer_of(got_r, &hr, got_t, &ht, &want, &either);
+        hits += (size_t)got_m;
+        tube_hits += (size_t)(got_m && shapes[hm.group_id] == HAIROBB_GROUP_SHAPE_ROUND);
+        differ += !(same_hit(got_m, &hm, got_w, &want) || (either && (same_hit(got_m, &hm, 1, &hr) || same_hit(got_m, &hm, 1, &ht))));
+        occluded_differ += hairobb_occluded1(mixed, &ray) != (got_r || got_t);
+        got_l = loaded ? hairobb_intersect1(loaded, &ray, &hl) : 0;
+        loaded_differ += !same_hit(got_m, &hm, got_l, &hl);
+        if (got_m && !either) {   /* a bounce from the hit, reflected about Ng */
+            hairobb_ray bounce = ray;
+            hairobb_hit next_m, next_r, next_t, next_w;
+            float along = 2.0f * (ray.dir[0] * hm.Ng[0] + ray.dir[1] * hm.Ng[1] + ray.dir[2] * hm.Ng[2]);
+            int k, gm, gr_, gt, gw, e;
+            for (k = 0; k < 3; ++k) {
+                bounce.org[k] = ray.org[k] + hm.t * ray.dir[k];
+                bounce.dir[k] = ray.dir[k] - along * hm.Ng[k];
+            }
+            gm = hairobb_intersect1_from(mixed, &hm, &bounce, &next_m);
+            gr_ = hairobb_intersect1_context(ribbons, &cr, &hm, &bounce, &next_r);
+            gt = hairobb_intersect1_context(tubes, &ct, &hm, &bounce, &next_t);
+            gw = nearer_of(gr_, &next_r, gt, &next_t, &next_w, &e);
+            ++bounces;
+            bounce_differ += !(same_hit(gm, &next_m, gw, &next_w) ||
+                               (e && (same_hit(gm, &next_m, 1, &next_r) || same_hit(gm, &next_m, 1, &next_t))));
+        }
+    }
+    printf("mixed shapes (%zu groups, even ribbons, odd tubes): %zu rays, %zu hits (%zu on tubes): %zu differ from the nearer of "
+           "the same groups' ribbon and tube BVHs', occluded1 %zu, bounces %zu of %zu; saved and loaded: %zu differ\n",
+           gr.count, rays, hits, tube_hits, differ, occluded_differ, bounce_differ, bounces, loaded_differ);
+    CHECK(hits > rays / 4 && tube_hits > hits / 8 && hits - tube_hits > hits / 8, "mixed shapes: %zu hits, %zu on tubes", hits, tube_hits);
+    CHECK(differ == 0 && occluded_differ == 0 && bounce_differ == 0 && loaded_differ == 0,
+          "mixed shapes: %zu hits, %zu occlusions, %zu bounces, %zu loaded differ", differ, occluded_differ, bounce_differ, loaded_differ);
+    CHECK(hairobb_get_group_stats(mixed, stats, MAX_GROUPS) == gr.count && stats[0].shape == HAIROBB_SHAPE_RIBBON &&
+              stats[1].shape == HAIROBB_SHAPE_ROUND,
+          "mixed shapes: group stats name the shapes");
+    /* a load must not ask another shape than the saved one (OPTIONS takes it) */
+    gr.group[1].shape = HAIROBB_GROUP_SHAPE_RIBBON;
+    r = hairobb_load_groups(bytes, size, gr.group, gr.count, NULL, &other);
+    CHECK(r == HAIROBB_ERROR_MISMATCH && !other, "mixed shapes: a load asking another shape: %s", hairobb_result_string(r));
+    for (g = 0; g < gr.count; ++g) gr.group[g].shape = HAIROBB_GROUP_SHAPE_OPTIONS;
+    r = hairobb_load_groups(bytes, size, gr.group, gr.count, NULL, &other);
+    CHECK(r == HAIROBB_OK && hairobb_get_group_stats(other, stats, 2) == 2 && stats[1].shape == HAIROBB_SHAPE_ROUND &&
+              stats[0].shape == HAIROBB_SHAPE_RIBBON,
+          "mixed shapes: a load asking the options' shape takes the saved ones: %s", hairobb_result_string(r));
+    hairobb_free(other);
+    other = NULL;
+    /* refused: a shape out of range; tubes in pieces precision */
+    gr.group[1].shape = (hairobb_group_shape)7;
+    CHECK(hairobb_build_groups(gr.group, gr.count, &o, &other) == HAIROBB_ERROR_INVALID_ARGUMENT && !other, "a group shape out of range");
+    gr.group[1].shape = HAIROBB_GROUP_SHAPE_ROUND;
+    o.precision = HAIROBB_PRECISION_PIECES;
+    CHECK(hairobb_build_groups(gr.group, gr.count, &o, &other) == HAIROBB_ERROR_INVALID_ARGUMENT && !other, "a round group in pieces");
+    gr.group[1].shape = HAIROBB_GROUP_SHAPE_OPTIONS;
+    CHECK(hairobb_build_groups(gr.group, gr.count, &o, &other) == HAIROBB_OK && hairobb_get_group_stats(other, stats, 1) == 1 &&
+              stats[0].shape == HAIROBB_SHAPE_RIBBON,
+          "ribbon groups in pieces");
+    hairobb_free(other);
+    other = NULL;
+    free(bytes);
+    {   /* an empty group's shape is moot: ribbons with an empty round group
+           build, save and load as ribbons, the empty group's shape kept */
+        hairobb_group with_empty[MAX_GROUPS + 1], as_ribbon[MAX_GROUPS + 1];
+        hairobb_bvh *plain = NULL;
+        memcpy(with_empty, as_ribbons.group, gr.count * sizeof with_empty[0]);
+        with_empty[gr.count] = gr.group[0];
+        with_empty[gr.count].segment_count = 0;
+        with_empty[gr.count].shape = HAIROBB_GROUP_SHAPE_ROUND;
+        memcpy(as_ribbon, with_empty, sizeof as_ribbon);
+        as_ribbon[gr.count].shape = HAIROBB_GROUP_SHAPE_OPTIONS;
+        o.precision = HAIROBB_PRECISION_EXACT;
+        CHECK(hairobb_build_groups(with_empty, gr.count + 1, &o, &other) == HAIROBB_OK &&
+                  hairobb_build_groups(as_ribbon, gr.count + 1, &o, &plain) == HAIROBB_OK,
+              "an empty round group: builds");
+        size = hairobb_save_size(other);
+        bytes = (unsigned char *)malloc(size);
+        CHECK(bytes && hairobb_save(other, bytes, size) == HAIROBB_OK && size == hairobb_save_size(plain) &&
+                  hairobb_get_group_stats(other, stats, MAX_GROUPS + 1) == gr.count + 1 && stats[gr.count].shape == HAIROBB_SHAPE_ROUND &&
+                  stats[0].shape == HAIROBB_SHAPE_RIBBON,
+              "an empty round group: saved as ribbon groups' bytes");
+        hairobb_free(other);
+        other = NULL;
+        r = hairobb_load_groups(bytes, size, with_empty, gr.count + 1, NULL, &other);
+        CHECK(r == HAIROBB_OK && hairobb_get_group_stats(other, stats, MAX_GROUPS + 1) == gr.count + 1 &&
+                  stats[gr.count].shape == HAIROBB_SHAPE_ROUND && stats[0].shape == HAIROBB_SHAPE_RIBBON,
+              "an empty round group: loads: %s", hairobb_result_string(r));
+        for (i = 0, differ = 0; other && plain && i < rays; i += 7) {
+            hairobb_ray ray = ray_of(org, dir, i, 0.0f);
+            hairobb_hit a, b;
+            int got_a = hairobb_intersect1(other, &ray, &a), got_b = hairobb_intersect1(plain, &ray, &b);
+            differ += !same_hit(got_a, &a, got_b, &b);
+        }
+        CHECK(differ == 0, "an empty round group: %zu rays differ from the ribbon groups alone", differ);
+        hairobb_free(other);
+        hairobb_free(plain);
+        free(bytes);
+    }
+    hairobb_free(loaded);
+    hairobb_free(mixed);
+    hairobb_free(ribbons);
+    hairobb_free(tubes);
+}
+
+/* hairobb_get_group_stats: segment and vertex counts as given, leaf
+   references adding up to hairobb_get_stats', bytes to
+   hairobb_memory_bytes; a group's bytes at least what it alone needs;
+   a one-group BVH is one group of everything. */
+static void test_group_stats(const grouped *gr)
+{
+    hairobb_group_stats stats[MAX_GROUPS + 1];
+    hairobb_stats tree;
+    hairobb_bvh *bvh = NULL;
+    size_t g, references = 0, bytes = 0, bad = 0;
+    hairobb_build_options o = hairobb_default_options();
+    int copy;
+    for (copy = 0; copy < 2; ++copy) {
+        o.bezier_copy = copy ? HAIROBB_AUTO : HAIROBB_OFF;
+        CHECK(hairobb_build_groups(gr->group, gr->count, &o, &bvh) == HAIROBB_OK, "group stats: builds");
+        if (!bvh) return;
+        hairobb_get_stats(bvh, &tree);
+        CHECK(hairobb_get_group_stats(bvh, stats, MAX_GROUPS + 1) == gr->count && hairobb_get_group_stats(bvh, stats, 1) == 1 &&
+                  hairobb_get_group_stats(NULL, stats, 1) == 0 && hairobb_get_group_stats(bvh, NULL, 1) == 0,
+              "group stats: counts written");
+        hairobb_get_group_stats(bvh, stats, MAX_GROUPS);
+        references = bytes = bad = 0;
+        for (g = 0; g < gr->count; ++g) {
+            references += stats[g].leaf_references;
+            bytes += stats[g].bytes;
+            bad += stats[g].segment_count != gr->group[g].segment_count || stats[g].vertex_count != gr->group[g].vertex_count ||
+                   stats[g].leaf_references < stats[g].segment_count || stats[g].bytes < 4 * stats[g].segment_count ||
+                   stats[g].shape != HAIROBB_SHAPE_RIBBON;
+        }
+        printf("group stats (%s): %zu groups, %zu leaf references (tree %zu), %zu bytes (hairobb_memory_bytes %zu), group 0 %zu bytes\n",
+               copy ? "copy" : "no copy", gr->count, references, tree.leaf_references, bytes, hairobb_memory_bytes(bvh), stats[0].bytes);
+        CHECK(bad == 0 && references == tree.leaf_references && bytes == hairobb_memory_bytes(bvh),
+              "group stats: %zu groups wrong; references %zu of %zu, bytes %zu of %zu", bad, references, tree.leaf_references, bytes,
+              hairobb_memory_bytes(bvh));
+        hairobb_free(bvh);
+        bvh = NULL;
+    }
+    CHECK(hairobb_build(gr->all_vertices, gr->all_vertex_count, gr->all_indices, gr->all_segment_count, NULL, &bvh) == HAIROBB_OK,
+          "group stats: one BVH");
+    hairobb_get_stats(bvh, &tree);
+    CHECK(hairobb_get_group_stats(bvh, stats, 4) == 1 && stats[0].segment_count == gr->all_segment_count &&
+              stats[0].leaf_references == tree.leaf_references && stats[0].bytes == hairobb_memory_bytes(bvh),
+          "group stats of a one-group BVH");
+    hairobb_free(bvh);
+}
+
 /* hairobb_interpolate at hits: the tangent is the hit's, the point within
    r of the hit's (ribbons: across the ray at the hit's depth; tubes: on
    the tube); hairobb_basis_weights on the caller's points, in every
@@ -628,6 +863,7 @@ int main(void)
             o.end_caps = HAIROBB_ON;
             snprintf(name, sizeof name, "combed 40k, %zu groups in %s order, tubes", counts[k], order ? "space" : "groom");
             compare_groups(name, &gr, &s, &o, org, dir, rays / 2);
+            if (counts[k] == 16 && order == 1) test_mixed_shapes(&gr, org, dir, rays / 2);
             if (counts[k] == 4 && order == 0) {
                 test_refit_group(&gr, org, dir, rays, HAIROBB_AUTO);
                 test_refit_group(&gr, org, dir, rays, HAIROBB_OFF);
@@ -636,6 +872,8 @@ int main(void)
                 test_save_load(&gr, org, dir, rays);
                 test_interpolate(&gr, org, dir, rays);
                 test_bad_input(&gr);
+                test_group_stats(&gr);
+                test_mixed_shapes(&gr, org, dir, rays);
             }
             grouped_free(&gr);
         }

@@ -1,14 +1,15 @@
 /* fuzz_groups.c - libFuzzer target: arbitrary bytes become 1-4 hair
    groups (points of any float, repeated points and zero-length segments
    made likely, indices past their group's points, empty groups, masks),
-   the options (ribbons or tubes, end caps, back faces, basis, the copy)
+   the options (ribbons or tubes, end caps, back faces, basis, the copy),
+   each group's shape (the options' or its own: ribbons and tubes mixed)
    and rays with ray masks. hairobb_build_groups must return one of its
    codes; where it builds, every hit must be sane (its group and segment
    in range, t in [tnear, tfar], occluded1 true where intersect1 hits),
    and where the hair and rays are of moderate size (coordinates and
    radii within 64: rounding far below the radii, where hits do not
    depend on the tree), the one the groups' own BVHs (hairobb_build on
-   each group's arrays) give together: the nearest over the groups the
+   each group's arrays, as its shape) give together: the nearest over the groups the
    ray's mask lets through, a tie to the lower group, to the bit, with
    the group and its segment named. Then hairobb_refit_group of one group to points
    the input moves (refused with INVALID_GEOMETRY, the BVH tracing as
@@ -86,6 +87,21 @@ static void read_group(groups_reader *r, fuzz_group_input *in, hairobb_group *g,
     g->indices = in->indices;
     g->segment_count = segments;
     g->mask = next_byte(r) % 4 == 0 ? 0u : next_byte(r) & 7u;
+}
+
+/* A group's shape: its own, or the options' */
+static hairobb_shape group_shape(const hairobb_build_options *o, const hairobb_group *g)
+{
+    return g->shape == HAIROBB_GROUP_SHAPE_ROUND ? HAIROBB_SHAPE_ROUND : g->shape == HAIROBB_GROUP_SHAPE_RIBBON ? HAIROBB_SHAPE_RIBBON : o->shape;
+}
+
+/* A group alone, as its shape (the oracle's BVH for it) */
+static hairobb_result build_own(const hairobb_build_options *options, const hairobb_group *g, hairobb_bvh **out)
+{
+    hairobb_build_options o = *options;
+    o.tangents = g->tangents;
+    o.shape = group_shape(options, g);
+    return hairobb_build(g->vertices, g->vertex_count, g->indices, g->segment_count, &o, out);
 }
 
 static int documented(hairobb_result r)
@@ -188,6 +204,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     for (i = 0; i < count; ++i) {
         read_group(&r, &in[i], &g[i], points_a_segment);
         if (o.basis == HAIROBB_BASIS_HERMITE) g[i].tangents = in[i].tangents;
+        if (flags & 16) g[i].shape = (hairobb_group_shape)(next_byte(&r) % 3);   /* MIXED SHAPES: the options' or its own */
+        fuzz_round |= group_shape(&o, &g[i]) == HAIROBB_SHAPE_ROUND;
     }
     for (i = 0; i < RAYS; ++i) {
         for (k = 0; k < 3; ++k) {
@@ -205,13 +223,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         if (bvh) fuzz_fail("a failed build left a BVH");
         return 0;
     }
-    for (i = 0; i < count; ++i) {   /* each group's own BVH (an empty group: none) */
+    for (i = 0; i < count; ++i) {   /* each group's own BVH, of its shape (an empty group: none) */
         if (!g[i].segment_count) continue;
-        o.tangents = g[i].tangents;
-        if (hairobb_build(g[i].vertices, g[i].vertex_count, g[i].indices, g[i].segment_count, &o, &own[i]) != HAIROBB_OK)
-            fuzz_fail("a group builds in a group BVH but not alone");
+        if (build_own(&o, &g[i], &own[i]) != HAIROBB_OK) fuzz_fail("a group builds in a group BVH but not alone");
     }
-    o.tangents = NULL;
     check_rays(bvh, own, g, count, rays, masks, moderate(g, count, points_a_segment, rays));
 
     /* a refit of one group to moved points (maybe bad) */
@@ -228,10 +243,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             own[which] = NULL;
             g[which].vertices = moved.points;
             g[which].tangents = o.basis == HAIROBB_BASIS_HERMITE ? moved.tangents : NULL;
-            o.tangents = g[which].tangents;
-            if (hairobb_build(g[which].vertices, n, g[which].indices, g[which].segment_count, &o, &own[which]) != HAIROBB_OK)
-                fuzz_fail("a group refitted that does not build alone");
-            o.tangents = NULL;
+            if (build_own(&o, &g[which], &own[which]) != HAIROBB_OK) fuzz_fail("a group refitted that does not build alone");
         }
         check_rays(bvh, own, g, count, rays, masks, moderate(g, count, points_a_segment, rays));
     }
