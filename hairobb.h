@@ -1728,13 +1728,12 @@ HAIROBB__INLINE uint32_t hairobb__group_of(const hairobb_bvh *bvh, uint32_t prim
     return lo;
 }
 
-/* Whether segment prim is a tube: the BVH's shape, or where its groups
-   mix shapes, the segment's bit (a load and a predictable branch more
-   per segment for every BVH). */
+/* Whether segment prim is a tube: the BVH's shape, and where its groups
+   mix shapes (such a BVH is round), the segment's bit: a ribbon BVH asks
+   as before, a round one loads one pointer more. */
 HAIROBB__INLINE int hairobb__is_tube(const hairobb_bvh *bvh, uint32_t prim)
 {
-    if (bvh->round_bits) return (int)((bvh->round_bits[prim >> 5] >> (prim & 31u)) & 1u);
-    return bvh->shape == HAIROBB_SHAPE_ROUND;
+    return bvh->shape == HAIROBB_SHAPE_ROUND && (!bvh->round_bits || ((bvh->round_bits[prim >> 5] >> (prim & 31u)) & 1u));
 }
 
 
@@ -8767,7 +8766,7 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
     hairobb__ray_curve c;
     hairobb__v4 qx, qy, qz, x, y, z, r, reach, neg_reach;
     float max_r, magnitude;
-    int inside, tube = hairobb__is_tube(bvh, prim);
+    int inside, tube;
     HAIROBB__COUNT(segment);
     hairobb__ray_points_v4(rs->org, cp, &qx, &qy, &qz, &r);
     x = hairobb__ray_row_v4(rs, 0, qx, qy, qz);
@@ -8782,6 +8781,7 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
     inside = (hairobb__v4_le_bits(x, reach) + 15) & (hairobb__v4_le_bits(neg_reach, x) + 15) &
              (hairobb__v4_le_bits(y, reach) + 15) & (hairobb__v4_le_bits(neg_reach, y) + 15) & 16;
     if (!inside) return 0;
+    tube = hairobb__is_tube(bvh, prim);   /* asked only of the segments left */
     /* The same for the planes z = tnear, tfar (times |dir|), and for the two
        lines parallel to the chord P0 P3 at distance max_r, widened by the
        rounding of the curve's points as the exact test evaluates them:
