@@ -542,8 +542,8 @@
      tree; options.end_caps and back_faces apply to its tubes, and pieces
      precision is refused where a group is round. Each segment is traced
      as its group's shape, exactly as a BVH of that shape alone would (a
-     bit a segment marks the tubes; every BVH pays one predictable branch
-     a segment tested for it). The shapes are saved; a load takes them,
+     bit a segment marks the tubes: a ribbon BVH pays nothing for it, a
+     round one a load a segment). The shapes are saved; a load takes them,
      and refuses (MISMATCH) a group that asks for another.
      INSTANCES: a groom is often placed more than once. hairobb_scene_build(instances, count,
      allocator_user, &scene) puts BVHs under one top level: each
