@@ -7107,6 +7107,18 @@ static inline int hairobb__v8_le_bits(hairobb__v8 a, hairobb__v8 b) { return _mm
 static inline int hairobb__v8_lt_bits(hairobb__v8 a, hairobb__v8 b) { return _mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LT_OQ)); }
 static inline void hairobb__v8_store(float *p, hairobb__v8 a) { _mm256_storeu_ps(p, a); }
 #if HAIROBB__AVX2
+/* lane i = a[index[i]], index in 0..3 */
+static inline hairobb__v8 hairobb__v8_pick4(const float *a, const int *index)
+{
+    return _mm256_permutevar8x32_ps(_mm256_castps128_ps256(_mm_loadu_ps(a)), _mm256_loadu_si256((const __m256i *)(const void *)index));
+}
+#else
+static inline hairobb__v8 hairobb__v8_pick4(const float *a, const int *index)
+{
+    return _mm256_setr_ps(a[index[0]], a[index[1]], a[index[2]], a[index[3]], a[index[4]], a[index[5]], a[index[6]], a[index[7]]);
+}
+#endif
+#if HAIROBB__AVX2
 static inline hairobb__v8 hairobb__v8_from_bytes(const signed char *q)
 {
     return _mm256_cvtepi32_ps(_mm256_cvtepi8_epi32(_mm_loadl_epi64((const __m128i *)(const void *)q)));
@@ -7133,6 +7145,13 @@ static inline hairobb__v8 hairobb__v8_max(hairobb__v8 a, hairobb__v8 b) { HAIROB
 static inline int hairobb__v8_le_bits(hairobb__v8 a, hairobb__v8 b) { return hairobb__v4_le_bits(a.lo, b.lo) | (hairobb__v4_le_bits(a.hi, b.hi) << 4); }
 static inline int hairobb__v8_lt_bits(hairobb__v8 a, hairobb__v8 b) { return hairobb__v4_lt_bits(a.lo, b.lo) | (hairobb__v4_lt_bits(a.hi, b.hi) << 4); }
 static inline void hairobb__v8_store(float *p, hairobb__v8 a) { hairobb__v4_store(p, a.lo); hairobb__v4_store(p + 4, a.hi); }
+static inline hairobb__v8 hairobb__v8_pick4(const float *a, const int *index)
+{
+    float lanes[8];
+    int i;
+    for (i = 0; i < 8; ++i) lanes[i] = a[index[i]];
+    return hairobb__v8_load(lanes);
+}
 static inline hairobb__v8 hairobb__v8_from_bytes(const signed char *q)
 {
     hairobb__v8 r;
@@ -8616,39 +8635,42 @@ static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__ray_poly 
     return found;
 }
 
-/* The Bernstein coefficients of a^2 - b^2 (degree 6) for cubics a, b in
-   Bernstein form, summed into out (x^2 + y^2 - r^2 = q in two calls). */
-static void hairobb__tube_squares(const float a[4], float sign, float out[7])
+/* The Bernstein coefficients of a^2 (degree 6) for a cubic a in
+   Bernstein form, coefficient k in lane k (lane 7: 0). Each lane is
+   (A p q + B s t) C for its pair products, which with B = 0 and C = 1
+   rounds as the product alone: c0 = a0 a0, c1 = a0 a1, c2 = (6 a0 a2 +
+   9 a1 a1) / 15, c3 = (2 a0 a3 + 18 a1 a2) / 20, c4 = (6 a1 a3 + 9 a2
+   a2) / 15, c5 = a2 a3, c6 = a3 a3. */
+HAIROBB__INLINE hairobb__v8 hairobb__tube_square(const float a[4])
 {
-    out[0] += sign * (a[0] * a[0]);
-    out[1] += sign * (a[0] * a[1]);
-    out[2] += sign * ((6.0f * a[0] * a[2] + 9.0f * a[1] * a[1]) * (1.0f / 15.0f));
-    out[3] += sign * ((2.0f * a[0] * a[3] + 18.0f * a[1] * a[2]) * (1.0f / 20.0f));
-    out[4] += sign * ((6.0f * a[1] * a[3] + 9.0f * a[2] * a[2]) * (1.0f / 15.0f));
-    out[5] += sign * (a[2] * a[3]);
-    out[6] += sign * (a[3] * a[3]);
+    static const int p[8] = {0, 0, 0, 0, 1, 2, 3, 0}, q[8] = {0, 1, 2, 3, 3, 3, 3, 0};
+    static const int s[8] = {0, 0, 1, 1, 2, 0, 0, 0}, t[8] = {0, 0, 1, 2, 2, 0, 0, 0};
+    static const float A[8] = {1.0f, 1.0f, 6.0f, 2.0f, 6.0f, 1.0f, 1.0f, 0.0f}, B[8] = {0.0f, 0.0f, 9.0f, 18.0f, 9.0f, 0.0f, 0.0f, 0.0f};
+    static const float C[8] = {1.0f, 1.0f, 1.0f / 15.0f, 1.0f / 20.0f, 1.0f / 15.0f, 1.0f, 1.0f, 0.0f};
+    hairobb__v8 first = hairobb__v8_mul(hairobb__v8_mul(hairobb__v8_load(A), hairobb__v8_pick4(a, p)), hairobb__v8_pick4(a, q));
+    hairobb__v8 second = hairobb__v8_mul(hairobb__v8_mul(hairobb__v8_load(B), hairobb__v8_pick4(a, s)), hairobb__v8_pick4(a, t));
+    return hairobb__v8_mul(hairobb__v8_add(first, second), hairobb__v8_load(C));
 }
 
 static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *rs, const hairobb__ray_curve *c, const float *cp,
                                    uint32_t prim, int any_hit)
 {
     hairobb__ray_poly poly;
-    float at_end[HAIROBB__TUBE_AT], start = -1.0f, bernstein[7] = {0, 0, 0, 0, 0, 0, 0}, scale = 0.0f;
+    float at_end[HAIROBB__TUBE_AT], start = -1.0f, bernstein[8], scale = 0.0f;
     float sample_u[HAIROBB__TUBE_SAMPLES + 8], sample_q[HAIROBB__TUBE_SAMPLES + 8], sample_slope[HAIROBB__TUBE_SAMPLES + 8];
     float min_tangent2 = 0.0f, margin, u_lo, u_hi, reach[2] = {0.0f, 0.0f};
     int k, samples, found = 0, first_below, last_below, first;
-    unsigned nonpositive = 0, carry_inside = 0, carry_negative = 0;
+    unsigned nonpositive, carry_inside = 0, carry_negative = 0;
     /* q's Bernstein coefficients bound it: all of them clearly positive,
        the ray passes farther than r from the centre line everywhere (most
        segments that pass the ribbon's cull) */
-    hairobb__tube_squares(c->x, 1.0f, bernstein);
-    hairobb__tube_squares(c->y, 1.0f, bernstein);
     for (k = 0; k < 4; ++k) scale = hairobb__maxf(scale, hairobb__maxf(c->x[k] * c->x[k] + c->y[k] * c->y[k], c->r[k] * c->r[k]));
-    hairobb__tube_squares(c->r, -1.0f, bernstein);
     margin = scale * (64.0f * FLT_EPSILON);
-    for (k = 0; k < 7; ++k) {
-        bernstein[k] -= margin;
-        if (bernstein[k] <= 0.0f) nonpositive |= 1u << k;
+    {
+        hairobb__v8 b = hairobb__v8_add(hairobb__v8_add(hairobb__v8_set1(0.0f), hairobb__tube_square(c->x)), hairobb__tube_square(c->y));
+        b = hairobb__v8_sub(hairobb__v8_add(b, hairobb__v8_mul(hairobb__v8_set1(-1.0f), hairobb__tube_square(c->r))), hairobb__v8_set1(margin));
+        hairobb__v8_store(bernstein, b);
+        nonpositive = (unsigned)hairobb__v8_le_bits(b, hairobb__v8_set1(0.0f)) & 0x7fu;
     }
     if (!nonpositive) return 0;
     /* the curve (u, q(u)) lies in the hull of the points (i/6, b_i): q <= 0
@@ -8664,13 +8686,27 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
     last_below = hairobb__highest_bit(nonpositive);
     u_lo = (float)first_below * (1.0f / 6.0f);
     u_hi = (float)last_below * (1.0f / 6.0f);
-    for (k = 0; k < 7; ++k) {
+    {
+        /* each point j above 0 against every k at or below it at once
+           (lane k), the crossings of the points k the mask names taken */
+        static const float lane_index[8] = {0.0f, 1.0f, 2.0f, 3.0f, 4.0f, 5.0f, 6.0f, 7.0f};
+        hairobb__v8 b = hairobb__v8_load(bernstein), index = hairobb__v8_load(lane_index), sixth = hairobb__v8_set1(1.0f / 6.0f);
+        float crossing[8];
         int j;
-        if (!(nonpositive >> k & 1u)) continue;
-        for (j = 0; j < first_below; ++j)   /* the line from j (above 0) to k */
-            u_lo = hairobb__minf(u_lo, ((float)j + (float)(k - j) * (bernstein[j] / (bernstein[j] - bernstein[k]))) * (1.0f / 6.0f));
-        for (j = last_below + 1; j < 7; ++j)   /* from k to j (above 0) */
-            u_hi = hairobb__maxf(u_hi, ((float)k + (float)(j - k) * (bernstein[k] / (bernstein[k] - bernstein[j]))) * (1.0f / 6.0f));
+        for (j = 0; j < first_below; ++j) {   /* the lines from j (above 0) to each k */
+            hairobb__v8 bj = hairobb__v8_set1(bernstein[j]), fj = hairobb__v8_set1((float)j);
+            unsigned left = nonpositive;
+            hairobb__v8_store(crossing, hairobb__v8_mul(hairobb__v8_add(fj, hairobb__v8_mul(hairobb__v8_sub(index, fj),
+                                                                                              hairobb__v8_div(bj, hairobb__v8_sub(bj, b)))), sixth));
+            for (; left; left &= left - 1u) u_lo = hairobb__minf(u_lo, crossing[hairobb__lowest_bit(left)]);
+        }
+        for (j = last_below + 1; j < 7; ++j) {   /* from each k to j (above 0) */
+            hairobb__v8 bj = hairobb__v8_set1(bernstein[j]), fj = hairobb__v8_set1((float)j);
+            unsigned left = nonpositive;
+            hairobb__v8_store(crossing, hairobb__v8_mul(hairobb__v8_add(index, hairobb__v8_mul(hairobb__v8_sub(fj, index),
+                                                                                                 hairobb__v8_div(b, hairobb__v8_sub(b, bj)))), sixth));
+            for (; left; left &= left - 1u) u_hi = hairobb__maxf(u_hi, crossing[hairobb__lowest_bit(left)]);
+        }
     }
     /* widened past the crossings' rounding */
     u_lo = u_lo <= 1.0f / 1024.0f ? 0.0f : u_lo - 1.0f / 1024.0f;
@@ -9647,8 +9683,9 @@ HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairob
 #define hairobb__tube_low hairobb__tube_low_avx2
 #define hairobb__tube_q hairobb__tube_q_avx2
 #define hairobb__tube_sample_u hairobb__tube_sample_u_avx2
-#define hairobb__tube_squares hairobb__tube_squares_avx2
 #define hairobb__tube_q_v8 hairobb__tube_q_v8_avx2
+#define hairobb__tube_square hairobb__tube_square_avx2
+#define hairobb__v8_pick4 hairobb__v8_pick4_avx2
 #define hairobb__horner_v8 hairobb__horner_v8_avx2
 #define hairobb__tube_g_v8 hairobb__tube_g_v8_avx2
 #define hairobb__ray_point hairobb__ray_point_avx2
