@@ -8359,7 +8359,7 @@ static float hairobb__tube_edge(const hairobb__ray_poly *p, float lo, float hi, 
 
 /* u at samples first .. first + 7 of [a, b] cut into `samples` steps:
    sample 0 is a and sample `samples` b exactly, and lanes past it are b. */
-static void hairobb__tube_sample_u(float a, float b, int samples, int first, float out[8])
+HAIROBB__INLINE void hairobb__tube_sample_u(float a, float b, int samples, int first, float out[8])
 {
     static const float lane_index[8] = {0.0f, 1.0f, 2.0f, 3.0f, 4.0f, 5.0f, 6.0f, 7.0f};
     hairobb__v8 step = hairobb__v8_div(hairobb__v8_add(hairobb__v8_set1((float)first), hairobb__v8_load(lane_index)),
@@ -8656,7 +8656,7 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
                                    uint32_t prim, int any_hit)
 {
     hairobb__ray_poly poly;
-    float at_end[HAIROBB__TUBE_AT], start = -1.0f, bernstein[8], scale = 0.0f;
+    float at_end[HAIROBB__TUBE_AT], start = -1.0f, bernstein[8], scale;
     float sample_u[HAIROBB__TUBE_SAMPLES + 8], sample_q[HAIROBB__TUBE_SAMPLES + 8], sample_slope[HAIROBB__TUBE_SAMPLES + 8];
     float min_tangent2 = 0.0f, margin, u_lo, u_hi, reach[2] = {0.0f, 0.0f};
     int k, samples, found = 0, first_below, last_below, first;
@@ -8664,7 +8664,10 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
     /* q's Bernstein coefficients bound it: all of them clearly positive,
        the ray passes farther than r from the centre line everywhere (most
        segments that pass the ribbon's cull) */
-    for (k = 0; k < 4; ++k) scale = hairobb__maxf(scale, hairobb__maxf(c->x[k] * c->x[k] + c->y[k] * c->y[k], c->r[k] * c->r[k]));
+    {   /* the largest |P2|^2 and r^2 of a control point (each >= 0: their max in any order) */
+        hairobb__v4 x = hairobb__v4_load(c->x), y = hairobb__v4_load(c->y), r = hairobb__v4_load(c->r);
+        scale = hairobb__v4_hmax(hairobb__v4_max(hairobb__v4_add(hairobb__v4_mul(x, x), hairobb__v4_mul(y, y)), hairobb__v4_mul(r, r)));
+    }
     margin = scale * (64.0f * FLT_EPSILON);
     {
         hairobb__v8 b = hairobb__v8_add(hairobb__v8_add(hairobb__v8_set1(0.0f), hairobb__tube_square(c->x)), hairobb__tube_square(c->y));
@@ -8732,7 +8735,7 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
     }
     /* bounds on |z'| and r over the segment (hairobb__tube_root_unreachable) */
     for (k = 0; k < 3; ++k) reach[0] = hairobb__maxf(reach[0], 3.0f * fabsf(c->z[k + 1] - c->z[k]));
-    for (k = 0; k < 4; ++k) reach[1] = hairobb__maxf(reach[1], c->r[k]);
+    reach[1] = hairobb__maxf(hairobb__v4_hmax(hairobb__v4_load(c->r)), 0.0f);
     hairobb__to_power_form(c, &poly);
     /* q and q' at every sample first, 8 at a time (at most 33 + 1; a last
        partial group's spare lanes at u_hi) */
