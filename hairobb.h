@@ -1348,8 +1348,8 @@ static long hairobb__core_count(void) { return sysconf(_SC_NPROCESSORS_ONLN); }
    and plain C for any other compiler (correct, slower). Helpers the
    kernels call are always inlined: inside the AVX2 copy they are then
    compiled for AVX2 too. A call from AVX2 code into SSE code (without the
-   VEX encoding) made the pieces intersector and the shared-rotation nodes
-   2x slower (bench, AMD EPYC). HAIROBB__NOINLINE, HAIROBB__COLD and
+   VEX encoding) pays a transition penalty on every call (the pieces
+   intersector and the shared-rotation nodes ran at half speed). HAIROBB__NOINLINE, HAIROBB__COLD and
    HAIROBB__TARGET_AVX2 (MSVC needs none to use AVX2 intrinsics) open a
    declaration; HAIROBB__PREFETCH is only a hint. */
 #if defined(__GNUC__) || defined(__clang__)
@@ -1412,8 +1412,8 @@ static void *hairobb__malloc_large(size_t bytes, void *user)
 /* ------------------------------------------------------------------------ */
 #ifndef HAIROBB_NODE_WIDTH             /* children per node: 4 or 8 */
 #if HAIROBB__AVX || HAIROBB__DISPATCH
-/* one AVX register per node test: with AVX2, 8-wide trees traced faster
-   than 4-wide, with SSE2 slower (the bench, combed fur); CPUs without
+/* one AVX register per node test: with AVX2, 8-wide trees trace faster
+   than 4-wide, with SSE2 slower (docs/benchmarking.md); CPUs without
    AVX2 are few. */
 #define HAIROBB_NODE_WIDTH 8
 #else
@@ -1437,8 +1437,8 @@ static void *hairobb__malloc_large(size_t bytes, void *user)
 #define HAIROBB__MAX_TIME_STEPS 65535u   /* a saved BVH keeps them in 16 bits' range */
 #define HAIROBB__MAX_SPLIT_BUDGET 4.0f
 /* A range a full node could not split further becomes a leaf, not a node of
-   its own, up to this many segments: a third less memory at equal or
-   better speed (combed, straight.hair, furBall_A). */
+   its own, up to this many segments: much less memory at equal or
+   better speed (docs/benchmarking.md, leaf size). */
 #define HAIROBB__FULL_NODE_LEAF (HAIROBB__W == 8 ? 3u : 2u)
 #define HAIROBB__BINS 16
 #define HAIROBB__MAX_PIECES 16
@@ -1450,17 +1450,17 @@ static void *hairobb__malloc_large(size_t bytes, void *user)
 #ifndef HAIROBB__SAMPLE
 /* The per-child compressed layout keeps float boxes in AABB nodes (the top
    of the tree) and in OBB nodes over more than this many references: every
-   ray passes there, and they are few (combed, straight.hair, furBall_A:
-   faster primary rays for under a byte per segment). */
+   ray passes there, and they are few: faster primary rays for under a
+   byte per segment. */
 #define HAIROBB__FLOAT_NODES 256
 #define HAIROBB__TASKS 64               /* about this many subtrees are built as tasks (threads) */
 #define HAIROBB__TASK_MIN 1024          /* of at least this many references, unless the input is smaller */
 #define HAIROBB__SAMPLE 16              /* segments sampled to rank hair-space candidates: 64 built slower, traced the same */
 #endif
 /* Relative costs of testing one child box and intersecting one segment.
-   OBB over AABB is measured: callgrind, instructions per node visit, 8-wide,
-   combed fur: per-child affine, shared-rotation and compressed OBB nodes
-   all cost 1.6-1.7 AABB node visits (the ray transform). */
+   OBB over AABB is measured in instructions a node visit (callgrind): an
+   OBB node of any layout costs about 1.6-1.7 AABB node visits (the ray
+   transform). */
 #ifndef HAIROBB__COST_AABB
 #define HAIROBB__COST_AABB 1.0f
 #endif
@@ -3384,9 +3384,9 @@ static void hairobb__find_split(hairobb__builder *b, const hairobb__range *r, un
     if (depth < HAIROBB__SAH_DEPTH) {
         if (world_binning) hairobb__bin_split(b, r, NULL, 2.0f * HAIROBB__COST_AABB, &area, slack, best);
         /* a mixed tree's top (above the tasks) splits in world space only: hair
-           is sorted by place there, and that part of the build is not spread
-           over threads (combed, straight.hair: 10% fewer build instructions,
-           traced instructions within 0.6%) */
+           is sorted by place there, where hair space seldom wins, and that
+           part of the build is not spread over threads: fewer build
+           instructions at the same traced ones */
         if (b->policy != HAIROBB_NODES_AABB_ONLY && (tries & HAIROBB__TRY_HAIR_SPACE) &&
             (b->policy == HAIROBB_NODES_OBB_ONLY || !hairobb__at_top(b, r->end - r->begin))) {
             float frame[9];
@@ -3411,9 +3411,10 @@ static void hairobb__find_split(hairobb__builder *b, const hairobb__range *r, un
 
 /* "Skip what a scene doesn't need": spatial splits or clustering that won
    none of HAIROBB__STRIKES splits in a row on the way down (below the top
-   of the tree, which is split by place) are not tried in the subtree below. Hair-space binning is always tried: on combed hair it
-   loses near the root, where hair is sorted by place, and wins most splits
-   below (80% of them), so no early verdict on it holds. */
+   of the tree, which is split by place) are not tried in the subtree
+   below. Hair-space binning is always tried: it loses near the root, where
+   hair is sorted by place, and wins most splits below, so no early verdict
+   on it holds. */
 static void hairobb__update_tries(hairobb__tries *t, const hairobb__split *split)
 {
     int h;
@@ -3864,8 +3865,7 @@ static void hairobb__write_compressed_obb_node(const hairobb__builder *b, unsign
     /* Empty lanes: the identity and the point box at -128 steps on each
        axis, outside every child. An inverted box would not do: this
        node's test takes each slab's planes in either order, which turns
-       it into the whole cube of steps (1.24 visits of empty children a
-       ray on combed fur, before). */
+       it into the whole cube of steps: rays would visit empty children. */
     for (i = count; i < HAIROBB__W; ++i) {
         node->rotation[0][i] = node->rotation[4][i] = node->rotation[8][i] = 127;
         for (k = 0; k < 3; ++k) node->lower[k][i] = node->upper[k][i] = -128;
@@ -4322,9 +4322,9 @@ typedef struct hairobb__task_memory {
 } hairobb__task_memory;
 #define HAIROBB__KEPT_BYTES ((size_t)32 << 20)
 
-/* Node bytes a reference takes, a little over Yeti's and combed fur's
-   with compressed nodes (29 to 33): a task's first node block, so that
-   it seldom grows by a copy. */
+/* Node bytes a reference takes, a little over what compressed nodes take
+   on the bench's scenes: a task's first node block, so that it seldom
+   grows by a copy. */
 #define HAIROBB__NODE_BYTES_GUESS 36
 
 /* memory: the thread's (NULL: the task's own, freed at its end). */
@@ -7289,8 +7289,8 @@ HAIROBB__INLINE void hairobb__converted_points(const hairobb_bvh *bvh, const flo
    at time (in [0, 1]), made into scratch: each float lerped between the
    two steps around it, then converted from another basis. Out of line
    (a cold path beside the leaf's), compiled with each pass of the
-   kernels: AVX2 code calling SSE code was 2x slower (see
-   tests/check_dispatch_calls.sh). No FMA in any pass, so they round
+   kernels: AVX2 code calling SSE code pays a transition on every call
+   (see tests/check_dispatch_calls.sh). No FMA in any pass, so they round
    alike. */
 HAIROBB__NOINLINE static const float *hairobb__made_moving(const hairobb_bvh *bvh, size_t at, float time, float scratch[16]);
 static const float *hairobb__made_moving(const hairobb_bvh *bvh, size_t at, float time, float scratch[16])
@@ -7602,8 +7602,8 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
             int base = sp;
             unsigned rest = (unsigned)bits & ((unsigned)bits - 1u);
             if (!(rest & (rest - 1u))) {
-                /* one or two hit children (over 80% of the visits that hit
-                   any on combed fur): which of the two it is picks values,
+                /* one or two hit children (most visits that hit any):
+                   which of the two it is picks values,
                    not a branch; the farther one is pushed, and taken off
                    at once where it is the nearer (one hit) */
                 int a = hairobb__lowest_bit((unsigned)bits), b = hairobb__highest_bit((unsigned)bits);
@@ -7858,8 +7858,8 @@ HAIROBB__INLINE void hairobb__bezier_v4(hairobb__v4 p0, hairobb__v4 p1, hairobb_
    (that point's rounding kept exactly and taken off, as
    hairobb__intersect_segment does for tubes), after one Newton step on f
    there (*u moves where it stays inside the segment):
-   relative to a far origin a root's t carried a few ulps of the distance
-   (|dt|/r p99 3.0e-3 on crossing 500k). In world space: with P, T the
+   relative to a far origin a root's t carried a few ulps of the distance,
+   far more than r allows on thin hair. In world space: with P, T the
    point and tangent relative to the ray's point and d its unit direction,
    z = P.d, f = P.T - z T.d, f' ~ |T|^2 - (T.d)^2. At u = 0 or 1 (a joint)
    the end point's own depth. Every root is polished before it is
@@ -8329,7 +8329,7 @@ static float hairobb__tube_low(const hairobb__ray_poly *p, float lo, float hi, f
    where one is met. Newton steps on q (q' / 2 = w - r r'), kept in the
    bracket (halving where a step leaves it); once a step is within a
    quarter of the tolerance, one point just past its end on the far side
-   closes the bracket: 4.3 evaluations where regula falsi took 6.1. */
+   closes the bracket: fewer evaluations than regula falsi. */
 static float hairobb__tube_edge(const hairobb__ray_poly *p, float lo, float hi, float q_lo, float q_hi)
 {
     float tolerance = (hi - lo) * (1.0f / 16384.0f), u = lo + (hi - lo) * (q_lo / (q_lo - q_hi)), next;
@@ -8391,8 +8391,8 @@ static float hairobb__tube_g_slope(const hairobb__ray_poly *p, float u, float sh
    leaves it). A step of 2^-23 or less has converged if g changes sign
    within 2^-23 past it (S' is infinite where the ray leaves the tube's
    reach, and there a step can be small far from the root): then that
-   step's end; else halving goes on. At most 30 evaluations (regula falsi
-   to the float spacing of u took 6.8 on rays into combed 200k). */
+   step's end; else halving goes on. At most 30 evaluations (fewer than
+   regula falsi takes to the float spacing of u). */
 static float hairobb__tube_root(const hairobb__ray_poly *p, float lo, float hi, float g_lo, float g_hi, float sheet)
 {
     const float tolerance = 1.0f / 8388608.0f;
@@ -8797,8 +8797,8 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
 /* One segment: moved into ray space and culled by its control polygon (the
    ribbon lies in its hull dilated by the largest radius), then the pieces.
    (Culling 4 segments at once with SIMD measured slower: leaves hold
-   about one segment.) Inlined into the leaf loop: out of line, its frame's
-   set-up and tear-down cost 47 of combed's 2,371 instructions a ray. */
+   about one segment.) Inlined into the leaf loop: out of line, its
+   frame's set-up and tear-down cost more than the call saves. */
 HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint32_t prim,
                                                const float *cp, int any_hit)
 {
@@ -8858,8 +8858,8 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
         /* A tube's points again, relative to the point of the ray at the
            depth of the segment's ends (as Embree's round curves): relative
            to a far origin the depth and the offsets from the ray carried a
-           few ulps of the distance (|dt|/r p99 3.2e-3 on crossing 500k,
-           where t's own rounding is about 5e-4). That point is rounded
+           few ulps of the distance, several times t's own rounding. That
+           point is rounded
            (by far more than r where the ray starts at 1e4): the rounding,
            kept exactly (hairobb__ray_point), is taken
            off the differences of the nearby points. */
