@@ -732,8 +732,12 @@
        >>kernels         compiled once, and again for AVX2 where dispatched:
        >>simd            SIMD wrappers and their plain C twins
        >>segment_points  a segment's Bezier points as traced
+       >>intersector     what ribbons and tubes share: ray space, the power form
+       >>hit             hit attributes, filters, the nearest hit so far
+       >>ribbon          ribbons: the pieces, their roots, the polish
+       >>tube            tubes: inside intervals and both sheets' roots
+       >>segment         a segment's cull and a leaf's segments
        >>traversal       each layout's node test and the traversal loop
-       >>intersector     ray/curve intersection and hit attributes
        >>tracing_api     hairobb_intersect1 and its siblings
        >>scene           instances under a top level: hairobb_scene_*
        >>dispatch        the kernels' names for their AVX2 copy
@@ -1349,9 +1353,10 @@ static long hairobb__core_count(void) { return sysconf(_SC_NPROCESSORS_ONLN); }
    kernels call are always inlined: inside the AVX2 copy they are then
    compiled for AVX2 too. A call from AVX2 code into SSE code (without the
    VEX encoding) pays a transition penalty on every call (the pieces
-   intersector and the shared-rotation nodes ran at half speed). HAIROBB__NOINLINE, HAIROBB__COLD and
-   HAIROBB__TARGET_AVX2 (MSVC needs none to use AVX2 intrinsics) open a
-   declaration; HAIROBB__PREFETCH is only a hint. */
+   intersector and the shared-rotation nodes ran at half speed).
+   HAIROBB__NOINLINE, HAIROBB__COLD and HAIROBB__TARGET_AVX2 (MSVC needs
+   none to use AVX2 intrinsics) open a declaration; HAIROBB__PREFETCH is
+   only a hint. */
 #if defined(__GNUC__) || defined(__clang__)
 #define HAIROBB__INLINE static inline __attribute__((always_inline))
 #define HAIROBB__NOINLINE __attribute__((noinline))
@@ -7357,322 +7362,7 @@ HAIROBB__INLINE int hairobb__same_group(const hairobb_bvh *bvh, uint32_t prim, i
 }
 
 /* ------------------------------------------------------------------------ */
-/* >>traversal  Traversal: node tests, nearest first                        */
-/* ------------------------------------------------------------------------ */
-HAIROBB__INLINE hairobb__vn hairobb__far_scale(hairobb__vn tfar)
-{
-    return hairobb__vn_mul(tfar, hairobb__vn_set1(HAIROBB__FAR_SCALE));
-}
-
-/* Slab test of a node's boxes in the slab ray's frame; planes points at
-   lower[3][W], followed by upper[3][W] ([axis][child] arrays). */
-HAIROBB__INLINE int hairobb__intersect_boxes(const float *planes, const hairobb__slab_ray *slab,
-                                             const hairobb__ray_state *rs, float dist[HAIROBB__W])
-{
-    hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
-#define HAIROBB__SLAB_AXIS(k) do { \
-        hairobb__vn o = hairobb__vn_set1(slab->org[k]), r = hairobb__vn_set1(slab->rdir[k]); \
-        tn = hairobb__vn_max(hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_load(planes + slab->near_plane[k]), o), r), tn); \
-        tf = hairobb__vn_min(hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_load(planes + slab->far_plane[k]), o), r), tf); \
-    } while (0)
-    HAIROBB__SLAB_AXIS(0);   /* written out, as in hairobb__intersect_compressed_obb_node */
-    HAIROBB__SLAB_AXIS(1);
-    HAIROBB__SLAB_AXIS(2);
-#undef HAIROBB__SLAB_AXIS
-    hairobb__vn_store(dist, tn);
-    return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
-}
-
-/* The ray rotated once into the node's frame; rotation preserves t. */
-static int hairobb__intersect_rotated_node(const hairobb__rotated_node *node, const hairobb__ray_state *rs, float dist[HAIROBB__W])
-{
-    hairobb__slab_ray slab;
-    float org[3], dir[3], moved[3];
-    int k;
-    for (k = 0; k < 3; ++k) moved[k] = rs->org[k] - node->centre[k];
-    for (k = 0; k < 3; ++k) {
-        org[k] = hairobb__dot3(node->rotation + 3 * k, moved);
-        dir[k] = hairobb__dot3(node->rotation + 3 * k, rs->dir);
-    }
-    hairobb__slab_setup(&slab, org, dir);
-    return hairobb__intersect_boxes(node->lower[0], &slab, rs, dist);
-}
-
-/* Bytes decoded to the planes the builder checked; the ray moved to the
-   node's centre, and rotated by the decoded frame for a rotated node. The
-   byte planes lower[3][W], upper[3][W] are laid out as the float ones, so
-   the slab ray's plane offsets index them too. */
-HAIROBB__INLINE int hairobb__intersect_compressed_node(const hairobb__compressed_node *node, int rotated,
-                                                       const signed char *end_planes, const hairobb__ray_state *rs,
-                                                       float dist[HAIROBB__W])
-{
-    hairobb__slab_ray slab;
-    hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar), tau = hairobb__vn_set1(rs->time);
-    const signed char *planes = node->lower[0];
-    float moved[3];
-    int k;
-    for (k = 0; k < 3; ++k) moved[k] = rs->org[k] - node->centre[k];
-    if (rotated) {
-        float frame[9], org[3], dir[3];
-        hairobb__decode_rotation(node->rotation, frame);
-        for (k = 0; k < 3; ++k) {
-            org[k] = hairobb__dot3(frame + 3 * k, moved);
-            dir[k] = hairobb__dot3(frame + 3 * k, rs->dir);
-        }
-        hairobb__slab_setup(&slab, org, dir);
-    } else {
-        slab = rs->world;
-        memcpy(slab.org, moved, sizeof moved);
-    }
-    for (k = 0; k < 3; ++k) {
-        hairobb__vn o = hairobb__vn_set1(slab.org[k]), r = hairobb__vn_set1(slab.rdir[k]), step = hairobb__vn_set1(node->step[k]);
-        hairobb__vn near_plane = hairobb__vn_from_bytes(planes + slab.near_plane[k]);
-        hairobb__vn far_plane = hairobb__vn_from_bytes(planes + slab.far_plane[k]);
-        if (end_planes) {   /* moving: the planes lerped to the ray's time, in steps */
-            near_plane = hairobb__vn_add(near_plane, hairobb__vn_mul(tau, hairobb__vn_sub(hairobb__vn_from_bytes(end_planes + slab.near_plane[k]), near_plane)));
-            far_plane = hairobb__vn_add(far_plane, hairobb__vn_mul(tau, hairobb__vn_sub(hairobb__vn_from_bytes(end_planes + slab.far_plane[k]), far_plane)));
-        }
-        near_plane = hairobb__vn_mul(near_plane, step);
-        far_plane = hairobb__vn_mul(far_plane, step);
-        tn = hairobb__vn_max(hairobb__vn_mul(hairobb__vn_sub(near_plane, o), r), tn);
-        tf = hairobb__vn_min(hairobb__vn_mul(hairobb__vn_sub(far_plane, o), r), tf);
-    }
-    hairobb__vn_store(dist, tn);
-    return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
-}
-
-/* Each child's rotation decoded as in the builder, the ray transformed per
-   child (lanes), then slab tests against its decoded byte planes. 1/d is
-   not clamped: where d = 0 it is +-inf, which puts t at +-inf (the ray
-   outside or inside the slab, as it is), or at NaN on a plane, and min and
-   max then keep the other operand (SSE's NaN rule, which the plain C twins
-   share): a slab the ray runs along does not cut its interval. The axes are
-   written out: a loop over them costs 4 instructions an axis. */
-HAIROBB__INLINE int hairobb__intersect_compressed_obb_node(const hairobb__compressed_obb_node *node,
-                                                           const signed char *end_planes, const hairobb__ray_state *rs,
-                                                           float dist[HAIROBB__W])
-{
-    hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar), tau = hairobb__vn_set1(rs->time);
-    hairobb__vn ox = hairobb__vn_set1(rs->org[0] - node->centre[0]), oy = hairobb__vn_set1(rs->org[1] - node->centre[1]);
-    hairobb__vn oz = hairobb__vn_set1(rs->org[2] - node->centre[2]);
-    hairobb__vn dx = hairobb__vn_set1(rs->dir[0]), dy = hairobb__vn_set1(rs->dir[1]), dz = hairobb__vn_set1(rs->dir[2]);
-    hairobb__vn one = hairobb__vn_set1(1.0f);
-#define HAIROBB__QOBB_AXIS(k) do { \
-        hairobb__vn m0 = hairobb__vn_from_bytes(node->rotation[3 * (k)]), m1 = hairobb__vn_from_bytes(node->rotation[3 * (k) + 1]); \
-        hairobb__vn m2 = hairobb__vn_from_bytes(node->rotation[3 * (k) + 2]); \
-        hairobb__vn o = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, ox), hairobb__vn_mul(m1, oy)), hairobb__vn_mul(m2, oz)); \
-        hairobb__vn d = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, dx), hairobb__vn_mul(m1, dy)), hairobb__vn_mul(m2, dz)); \
-        hairobb__vn r = hairobb__vn_div(one, d), step = hairobb__vn_set1(node->step[k]); \
-        hairobb__vn lo = hairobb__vn_from_bytes(node->lower[k]), hi = hairobb__vn_from_bytes(node->upper[k]), t0, t1; \
-        if (end_planes) {   /* moving: the planes lerped to the ray's time, in steps */ \
-            lo = hairobb__vn_add(lo, hairobb__vn_mul(tau, hairobb__vn_sub(hairobb__vn_from_bytes(end_planes + (k) * HAIROBB__W), lo))); \
-            hi = hairobb__vn_add(hi, hairobb__vn_mul(tau, hairobb__vn_sub(hairobb__vn_from_bytes(end_planes + (3 + (k)) * HAIROBB__W), hi))); \
-        } \
-        t0 = hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_mul(lo, step), o), r); \
-        t1 = hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_mul(hi, step), o), r); \
-        tn = hairobb__vn_max(hairobb__vn_min(t0, t1), tn); \
-        tf = hairobb__vn_min(hairobb__vn_max(t0, t1), tf); \
-    } while (0)
-    HAIROBB__QOBB_AXIS(0);
-    HAIROBB__QOBB_AXIS(1);
-    HAIROBB__QOBB_AXIS(2);
-#undef HAIROBB__QOBB_AXIS
-    hairobb__vn_store(dist, tn);
-    return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
-}
-
-/* Each child's slab pair along a row of its map is [0, 1] in unit space;
-   1/d unclamped, as in hairobb__intersect_compressed_obb_node. */
-HAIROBB__INLINE int hairobb__intersect_obb_node(const hairobb__obb_node *node, const hairobb__ray_state *rs, float dist[HAIROBB__W])
-{
-    hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
-    hairobb__vn one = hairobb__vn_set1(1.0f), zero = hairobb__vn_set1(0.0f);
-    hairobb__vn ox = hairobb__vn_set1(rs->org[0] - node->centre[0]), oy = hairobb__vn_set1(rs->org[1] - node->centre[1]);
-    hairobb__vn oz = hairobb__vn_set1(rs->org[2] - node->centre[2]);
-    hairobb__vn dx = hairobb__vn_set1(rs->dir[0]), dy = hairobb__vn_set1(rs->dir[1]), dz = hairobb__vn_set1(rs->dir[2]);
-#define HAIROBB__OBB_ROW(row) do { \
-        hairobb__vn m0 = hairobb__vn_load(node->xfm[3 * (row)]), m1 = hairobb__vn_load(node->xfm[3 * (row) + 1]); \
-        hairobb__vn m2 = hairobb__vn_load(node->xfm[3 * (row) + 2]), m3 = hairobb__vn_load(node->xfm[9 + (row)]); \
-        hairobb__vn o = hairobb__vn_add(hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, ox), hairobb__vn_mul(m1, oy)), hairobb__vn_mul(m2, oz)), m3); \
-        hairobb__vn d = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, dx), hairobb__vn_mul(m1, dy)), hairobb__vn_mul(m2, dz)); \
-        hairobb__vn r = hairobb__vn_div(one, d); \
-        hairobb__vn t0 = hairobb__vn_mul(hairobb__vn_sub(zero, o), r); \
-        hairobb__vn t1 = hairobb__vn_mul(hairobb__vn_sub(one, o), r); \
-        tn = hairobb__vn_max(hairobb__vn_min(t0, t1), tn); \
-        tf = hairobb__vn_min(hairobb__vn_max(t0, t1), tf); \
-    } while (0)
-    HAIROBB__OBB_ROW(0);
-    HAIROBB__OBB_ROW(1);
-    HAIROBB__OBB_ROW(2);
-#undef HAIROBB__OBB_ROW
-    hairobb__vn_store(dist, tn);
-    return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
-}
-
-static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint64_t ref, int any_hit);
-
-/* A child pushed on the stack waits at least one node test: its first lines
-   (a node's planes; a leaf's first copied segment) are asked for now. */
-HAIROBB__INLINE void hairobb__prefetch_child(const hairobb_bvh *bvh, uint64_t ref)
-{
-    if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_LEAF) {
-        if (bvh->leaf_points) HAIROBB__PREFETCH(bvh->leaf_points + 16 * (size_t)(ref >> 8));
-    } else {
-        const unsigned char *node = HAIROBB__NODE_AT(bvh->nodes, ref);
-        HAIROBB__PREFETCH(node);
-        HAIROBB__PREFETCH(node + 64);
-        HAIROBB__PREFETCH(node + 128);
-    }
-}
-
-/* The node types other than the default layout's (per-child compressed
-   OBB, AABB) and leaves: out of line, so that the loop tests its three
-   common types with two well-predicted compares instead of a jump table. */
-static HAIROBB__NOINLINE int hairobb__intersect_other_node(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint64_t ref,
-                                                           float dist[HAIROBB__W], const uint64_t **child)
-{
-    unsigned type = HAIROBB__REF_TYPE(ref);
-    const void *node;
-    if (type == HAIROBB__REF_EMPTY) {
-        *child = NULL;
-        return 0;
-    }
-    node = HAIROBB__NODE_AT(bvh->nodes, ref);
-    if (type == HAIROBB__REF_QAABB || type == HAIROBB__REF_QOBB) {
-        *child = HAIROBB__CAST(const hairobb__compressed_node *, node)->child;
-        return hairobb__intersect_compressed_node(HAIROBB__CAST(const hairobb__compressed_node *, node), type == HAIROBB__REF_QOBB,
-                                                  NULL, rs, dist);
-    }
-    if (type == HAIROBB__REF_ROTATED) {
-        *child = HAIROBB__CAST(const hairobb__rotated_node *, node)->child;
-        return hairobb__intersect_rotated_node(HAIROBB__CAST(const hairobb__rotated_node *, node), rs, dist);
-    }
-    if (type == HAIROBB__REF_QOBB_PER_CHILD_MB) {   /* moving hair's nodes: the planes at time 1 follow */
-        *child = HAIROBB__CAST(const hairobb__compressed_obb_node *, node)->child;
-        return hairobb__intersect_compressed_obb_node(HAIROBB__CAST(const hairobb__compressed_obb_node *, node),
-                                                      HAIROBB__CAST(const signed char *, node) + sizeof(hairobb__compressed_obb_node), rs, dist);
-    }
-    if (type == HAIROBB__REF_QAABB_MB || type == HAIROBB__REF_QOBB_MB) {
-        *child = HAIROBB__CAST(const hairobb__compressed_node *, node)->child;
-        return hairobb__intersect_compressed_node(HAIROBB__CAST(const hairobb__compressed_node *, node), type == HAIROBB__REF_QOBB_MB,
-                                                  HAIROBB__CAST(const signed char *, node) + sizeof(hairobb__compressed_node), rs, dist);
-    }
-    *child = HAIROBB__CAST(const hairobb__obb_node *, node)->child;
-    return hairobb__intersect_obb_node(HAIROBB__CAST(const hairobb__obb_node *, node), rs, dist);
-}
-
-/* Nearest-first traversal; any_hit stops at the first hit. A node with
-   several hit children pushes them all, sorted so that the nearest is on
-   top, and goes on with that one. */
-static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int any_hit)
-{
-    uint64_t stack_ref[HAIROBB__STACK];
-    float stack_dist[HAIROBB__STACK];
-    int sp = 0, found = 0;
-    uint64_t ref = bvh->root;
-    rs->any_hit = any_hit;
-    for (;;) {
-        /* the default layout's types and leaves first, a compare each; the rest out of line */
-        unsigned type = HAIROBB__REF_TYPE(ref);
-        const void *node;   /* set for inner nodes only: a one-leaf tree has no node memory */
-        const uint64_t *child;
-        float dist[HAIROBB__W];
-        int bits, i;
-        if (type == HAIROBB__REF_QOBB_PER_CHILD) {
-            node = HAIROBB__NODE_AT(bvh->nodes, ref);
-            bits = hairobb__intersect_compressed_obb_node(HAIROBB__CAST(const hairobb__compressed_obb_node *, node), NULL, rs, dist);
-            child = HAIROBB__CAST(const hairobb__compressed_obb_node *, node)->child;
-        } else if (type == HAIROBB__REF_LEAF) {
-            HAIROBB__COUNT(leaf);
-            if (hairobb__intersect_leaf(bvh, rs, ref, any_hit)) {
-                found = 1;
-                if (any_hit) return 1;
-            }
-            bits = 0;
-            child = NULL;
-        } else if (type == HAIROBB__REF_AABB) {
-            const hairobb__aabb_node *aabb = HAIROBB__CAST(const hairobb__aabb_node *, (const void *)HAIROBB__NODE_AT(bvh->nodes, ref));
-            bits = hairobb__intersect_boxes(aabb->lower[0], &rs->world, rs, dist);
-            child = aabb->child;
-        } else {
-            bits = hairobb__intersect_other_node(bvh, rs, ref, dist, &child);
-        }
-        if (child) HAIROBB__COUNT(node);
-        if (bits) {
-            int base = sp;
-            unsigned rest = (unsigned)bits & ((unsigned)bits - 1u);
-            if (!(rest & (rest - 1u))) {
-                /* one or two hit children (most visits that hit any):
-                   which of the two it is picks values,
-                   not a branch; the farther one is pushed, and taken off
-                   at once where it is the nearer (one hit) */
-                int a = hairobb__lowest_bit((unsigned)bits), b = hairobb__highest_bit((unsigned)bits);
-                int a_first = dist[a] < dist[b];      /* as the sort below orders them */
-                stack_ref[sp] = a_first ? child[b] : child[a];
-                stack_dist[sp] = a_first ? dist[b] : dist[a];
-                ref = a_first ? child[a] : child[b];
-                sp += rest != 0;
-                continue;
-            }
-            i = hairobb__lowest_bit((unsigned)bits);
-            bits &= bits - 1;
-            if (any_hit) {
-                /* any hit ends the ray: the nearest child goes first (on
-                   crossing hair unsorted order cost a fifth of the shadow
-                   rays' speed), the others wait unsorted */
-                float nearest = dist[i];
-                ref = child[i];
-                do {
-                    int j = hairobb__lowest_bit((unsigned)bits);
-                    int nearer = dist[j] < nearest;
-                    bits &= bits - 1;
-                    stack_ref[sp] = nearer ? ref : child[j];
-                    stack_dist[sp] = nearer ? nearest : dist[j];
-                    hairobb__prefetch_child(bvh, stack_ref[sp]);
-                    ref = nearer ? child[j] : ref;
-                    nearest = nearer ? dist[j] : nearest;
-                    ++sp;
-                } while (bits);
-                continue;
-            }
-            /* three or more: onto the stack sorted, nearest on top, equal
-               distances in child order (the higher index above). Each
-               child's place is its rank, the hit children farther than it
-               or as near with a lower index, counted by two compares over
-               the node's lanes: no branch on the distances, where an
-               insertion sort mispredicts about once a child */
-            {
-                hairobb__vn lanes = hairobb__vn_load(dist);
-                unsigned hits = (unsigned)bits | (1u << i), left = hits;
-                do {
-                    int j = hairobb__lowest_bit(left);
-                    hairobb__vn dj = hairobb__vn_set1(dist[j]);
-                    unsigned not_nearer = (unsigned)hairobb__vn_le_bits(dj, lanes);
-                    unsigned not_farther = (unsigned)hairobb__vn_le_bits(lanes, dj);
-                    int at = base + hairobb__bit_count(not_nearer & ~(not_farther & ~((1u << j) - 1u)) & hits);
-                    left &= left - 1u;
-                    stack_ref[at] = child[j];
-                    stack_dist[at] = dist[j];
-                    hairobb__prefetch_child(bvh, child[j]);
-                } while (left);
-                sp = base + hairobb__bit_count(hits) - 1;
-            }
-            ref = stack_ref[sp];
-            continue;
-        }
-        /* widened as the node tests widen tfar: a child pushed before tfar
-           shrank is dropped only where its test would now cull it, so the
-           hits found do not depend on the order children are visited in */
-        do {
-            if (sp == 0) return found;
-            --sp;
-        } while (stack_dist[sp] > rs->tfar * HAIROBB__FAR_SCALE);
-        ref = stack_ref[sp];
-    }
-}
-
-/* ------------------------------------------------------------------------ */
-/* >>intersector  Ray / curve intersection                                  */
+/* >>intersector  Ray / curve intersection: what ribbons and tubes share    */
 /* ------------------------------------------------------------------------ */
 /* The point of the ray at t, rounded (base), and that rounding (error: the
    ray's point is base + error), kept exactly where it could reach 2^-12 of
@@ -7760,20 +7450,6 @@ HAIROBB__INLINE hairobb__v4 hairobb__horner(const hairobb__ray_poly *p, hairobb_
         hairobb__v4_load(p->a[3]), u), hairobb__v4_load(p->a[2])), u), hairobb__v4_load(p->a[1])), u), hairobb__v4_load(p->a[0]));
 }
 
-/* f(u) = dot(P2, P2') vanishes where the ribbon faces the ray; f'(u) too. */
-static float hairobb__ribbon_f(const hairobb__ray_poly *c, float u, float *derivative)
-{
-    hairobb__v4 d1, d2, value = hairobb__horner(c, hairobb__v4_set1(u), &d1, &d2);
-    float products[4], squares[4], second[4];
-    hairobb__v4_store(products, hairobb__v4_mul(value, d1));
-    if (derivative) {
-        hairobb__v4_store(squares, hairobb__v4_mul(d1, d1));
-        hairobb__v4_store(second, hairobb__v4_mul(value, d2));
-        *derivative = squares[0] + squares[1] + second[0] + second[1];
-    }
-    return products[0] + products[1];
-}
-
 /* n made a unit vector in place; 0 where it has no length (zero, or not
    finite). Where its squared length leaves float's normal range (a
    normal of 1e-20 and less, found where a ray runs along a ribbon's
@@ -7811,12 +7487,211 @@ static void hairobb__hit_to_world(const hairobb__placed *placed, uint32_t id, ha
     hit->instance_id = id;
 }
 
+/* hairobb__bezier's value and first derivative for 4 curves at once, one
+   per lane, rounded as it rounds: rows p0..p3 hold the control points. */
+HAIROBB__INLINE void hairobb__bezier_v4(hairobb__v4 p0, hairobb__v4 p1, hairobb__v4 p2, hairobb__v4 p3, float u,
+                               hairobb__v4 *value, hairobb__v4 *d1)
+{
+    float s = 1.0f - u;
+    hairobb__v4 e0 = hairobb__v4_sub(p1, p0), e1 = hairobb__v4_sub(p2, p1), e2 = hairobb__v4_sub(p3, p2);
+    *d1 = hairobb__v4_mul(hairobb__v4_set1(3.0f),
+                          hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(s * s), e0),
+                                                          hairobb__v4_mul(hairobb__v4_set1(2.0f * u * s), e1)),
+                                          hairobb__v4_mul(hairobb__v4_set1(u * u), e2)));
+    *value = hairobb__v4_add(hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(s * s * s), p0),
+                                                             hairobb__v4_mul(hairobb__v4_set1(3.0f * u * s * s), p1)),
+                                             hairobb__v4_mul(hairobb__v4_set1(3.0f * u * u * s), p2)),
+                             hairobb__v4_mul(hairobb__v4_set1(u * u * u), p3));
+}
+
+/* ------------------------------------------------------------------------ */
+/* >>hit  Hits: attributes, filters, the nearest hit so far                 */
+/* ------------------------------------------------------------------------ */
+/* A tube's hit attributes, in world space from the segment's points cp:
+   the tangent dP/du; v, the ribbon's formula at the tube's point X (the
+   signed offset of the ray from the centre line across the fibre, over r);
+   and the outward unit normal, the gradient of |X - c(u(X))|^2 -
+   r(u(X))^2 with its curvature term: R - r r' c' / (|c'|^2 - R.c''), R = X
+   - c(u). */
+static void hairobb__tube_hit_at(const hairobb__ray_state *rs, const float *cp, float u, float t, int cap, hairobb_hit *hit)
+{
+    float s = 1.0f - u, b[4], db[4], d2b[4], C[4], T[4], T2[4], r, dr;
+    float R[3], n[3], cross[3], along, tperp2, denominator, scale;
+    const float *unit_dir = rs->frame + 6;
+    hairobb__v4 value, tangent, second;
+    int i, k;
+    b[0] = s * s * s; b[1] = 3.0f * u * s * s; b[2] = 3.0f * u * u * s; b[3] = u * u * u;
+    db[0] = -3.0f * s * s; db[1] = 3.0f * s * s - 6.0f * u * s; db[2] = 6.0f * u * s - 3.0f * u * u; db[3] = 3.0f * u * u;
+    d2b[0] = 6.0f * s; d2b[1] = 6.0f * u - 12.0f * s; d2b[2] = 6.0f * s - 12.0f * u; d2b[3] = 6.0f * u;
+    /* the sums over control points in order, x, y, z and r in the lanes
+       (a lane rounds as a scalar sum from 0 would) */
+    value = tangent = second = hairobb__v4_set1(0.0f);   /* 0 + -0 is +0, as a scalar sum from 0 */
+    for (i = 0; i < 4; ++i) {
+        hairobb__v4 point = hairobb__v4_load(cp + 4 * i);
+        value = hairobb__v4_add(value, hairobb__v4_mul(hairobb__v4_set1(b[i]), point));
+        tangent = hairobb__v4_add(tangent, hairobb__v4_mul(hairobb__v4_set1(db[i]), point));
+        second = hairobb__v4_add(second, hairobb__v4_mul(hairobb__v4_set1(d2b[i]), point));
+    }
+    hairobb__v4_store(C, value);
+    hairobb__v4_store(T, tangent);
+    hairobb__v4_store(T2, second);
+    r = hairobb__maxf(C[3], 0.0f);
+    dr = T[3];
+    for (k = 0; k < 3; ++k) R[k] = rs->org[k] + t * rs->dir[k] - C[k];
+    memcpy(hit->tangent, T, sizeof hit->tangent);
+    denominator = hairobb__dot3(T, T) - hairobb__dot3(R, T2);
+    scale = denominator != 0.0f ? r * dr / denominator : 0.0f;
+    for (k = 0; k < 3; ++k) n[k] = cap ? (u > 0.5f ? T[k] : -T[k]) : R[k] - scale * T[k];   /* a cap: along the strand, out */
+    if (!hairobb__normalize3(n))   /* degenerate: against the ray */
+        for (k = 0; k < 3; ++k) n[k] = -unit_dir[k];
+    for (k = 0; k < 3; ++k) hit->Ng[k] = n[k];
+    along = hairobb__dot3(T, unit_dir);
+    tperp2 = hairobb__dot3(T, T) - along * along;
+    cross[0] = T[1] * R[2] - T[2] * R[1];
+    cross[1] = T[2] * R[0] - T[0] * R[2];
+    cross[2] = T[0] * R[1] - T[1] * R[0];
+    hit->v = 0.0f;
+    if (r > 0.0f && tperp2 > 0.0f) {
+        hit->v = hairobb__dot3(cross, unit_dir) / (sqrtf(tperp2) * r);
+        hit->v = hairobb__maxf(-1.0f, hairobb__minf(1.0f, hit->v));
+    }
+}
+
+/* Hit attributes of the hit at u, t on segment prim, c in ray space:
+   computed once for the final hit, and for each one a hit filter is shown. */
+/* A hit's ids: its group and the segment's index in it (a scene maps
+   instance_id after). */
+HAIROBB__INLINE void hairobb__hit_ids(const hairobb_bvh *bvh, uint32_t prim, hairobb_hit *hit)
+{
+    uint32_t group = hairobb__group_of(bvh, prim);
+    hit->group_id = group;
+    hit->prim_id = bvh->group_first ? prim - bvh->group_first[group] : prim;
+    hit->instance_id = HAIROBB_INVALID_ID;
+}
+
+static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint32_t prim, const float *points,
+                            const hairobb__ray_curve *c, float u, float t, int cap, hairobb_hit *hit)
+{
+    float scratch[16];
+    const float *cp = points ? points : hairobb__segment_points(bvh, prim, rs->time, scratch);
+    if (hairobb__is_tube(bvh, prim)) {
+        hairobb__tube_hit_at(rs, cp, u, t, cap, hit);
+        hit->t = t;
+        hit->u = u;
+        hairobb__hit_ids(bvh, prim, hit);
+        return;
+    }
+    hairobb__v4 x4 = hairobb__v4_load(c->x), y4 = hairobb__v4_load(c->y), z4 = hairobb__v4_set1(0.0f), r4 = hairobb__v4_load(c->r);
+    hairobb__v4 value, d1, tangent, neg_dir, n4;
+    float at[4], tangent_at[4], tangent_xy[2], x, y, r, tlen2, along, n[4];
+    const float *unit_dir = rs->frame + 6;
+    hairobb__bezier_v4(hairobb__v4_load(cp), hairobb__v4_load(cp + 4), hairobb__v4_load(cp + 8), hairobb__v4_load(cp + 12),
+                       u, &value, &tangent);
+    hairobb__v4_store(tangent_at, tangent);
+    memcpy(hit->tangent, tangent_at, sizeof hit->tangent);
+    hairobb__v4_transpose(&x4, &y4, &z4, &r4);     /* rows: control points (x, y, 0, r): z is not needed */
+    hairobb__bezier_v4(x4, y4, z4, r4, u, &value, &d1);
+    hairobb__v4_store(at, value);
+    hairobb__v4_store(tangent_at, d1);
+    x = at[0]; y = at[1]; r = at[3];
+    tangent_xy[0] = tangent_at[0]; tangent_xy[1] = tangent_at[1];
+    tlen2 = tangent_xy[0] * tangent_xy[0] + tangent_xy[1] * tangent_xy[1];
+    hit->v = 0.0f;
+    if (r > 0.0f && tlen2 > 0.0f) {
+        hit->v = (tangent_xy[1] * x - tangent_xy[0] * y) / (sqrtf(tlen2) * r);
+        hit->v = hairobb__maxf(-1.0f, hairobb__minf(1.0f, hit->v));
+    }
+    /* the ribbon's normal: -dir without its component along the tangent
+       (lanes x, y, z; lane 3 is not used) */
+    along = hairobb__dot3(unit_dir, hit->tangent);
+    tlen2 = hairobb__dot3(hit->tangent, hit->tangent);
+    neg_dir = hairobb__v4_set3(-unit_dir[0], -unit_dir[1], -unit_dir[2]);
+    n4 = hairobb__v4_add(neg_dir, tlen2 > 0.0f ? hairobb__v4_div(hairobb__v4_mul(hairobb__v4_set1(along), tangent), hairobb__v4_set1(tlen2))
+                                               : hairobb__v4_set1(0.0f));
+    hairobb__v4_store(n, n4);
+    if (!hairobb__normalize3(n)) hairobb__v4_store(n, neg_dir);   /* the ray along the tangent: against the ray */
+    memcpy(hit->Ng, n, sizeof hit->Ng);
+    hit->t = t;
+    hit->u = u;
+    hairobb__hit_ids(bvh, prim, hit);
+}
+
+/* The segment is moved to ray space again: the intersector's copy is not
+   at hand in hairobb__accept. */
+/* Whether the neighbour in index order begins (end 1) or ends (end 0)
+   where this segment's end point is: a joint, smooth or a kink. */
+static int hairobb__shares_end(const hairobb_bvh *bvh, uint32_t prim, int end, float time, const float *cp)
+{
+    float scratch[16];
+    const float *q;
+    if ((end ? (size_t)prim + 1 >= bvh->segment_count : prim == 0) || !hairobb__same_group(bvh, prim, end)) return 0;
+    q = hairobb__segment_points(bvh, end ? prim + 1 : prim - 1, time, scratch) + 12 * (1 - end);
+    cp += 12 * end;
+    return cp[0] == q[0] && cp[1] == q[1] && cp[2] == q[2];
+}
+
+/* Whether the filters ignored this crossing already (HAIROBB__SHOWN): the
+   same segment within 2^-10 of u, or at a joint the neighbour's matching
+   end, at a t within r / 64 of the segment (plus t's rounding), on the
+   same side of a tube (exit: 1 where the ray leaves it; ribbons 0). */
+static int hairobb__ignored_before(const hairobb__ray_state *rs, uint32_t prim, float u, float t, int exit, const float *cp)
+{
+    const float near_end = 1.0f / 1024.0f;
+    float close = hairobb__maxf(cp[3], cp[15]) * (1.0f / 64.0f) * rs->inv_dir_length + fabsf(t) * (1.0f / 65536.0f);
+    int end = u <= near_end ? 0 : u >= 1.0f - near_end ? 1 : -1, list, i;
+    for (list = 0; list < 2; ++list) {
+        int kept = rs->ignored_count[list] < HAIROBB__SHOWN ? rs->ignored_count[list] : HAIROBB__SHOWN;
+        for (i = 0; i < kept; ++i) {
+            uint32_t other = rs->ignored_prim[list][i];
+            float other_u = rs->ignored_u[list][i];
+            if (!(fabsf(rs->ignored_t[list][i] - t) <= close) || rs->ignored_exit[list][i] != exit) continue;
+            if (other == prim && fabsf(other_u - u) <= near_end) return 1;
+            if (end == 1 && other == prim + 1 && other_u <= near_end && hairobb__shares_end(rs->bvh, prim, 1, rs->time, cp)) return 1;
+            if (end == 0 && other + 1 == prim && other_u >= 1.0f - near_end && hairobb__shares_end(rs->bvh, prim, 0, rs->time, cp))
+                return 1;
+        }
+    }
+    return 0;
+}
+
+/* Whether a filter drops the hit at u, t on segment prim (showing it the
+   hit once): out of line, so that hairobb__accept stays small where no
+   filter is set. */
+HAIROBB__COLD static int hairobb__hit_filtered_out(hairobb__ray_state *rs, uint32_t prim, float u, float t)
+{
+    hairobb_hit hit;
+    hairobb__ray_curve c;
+    hairobb__v4 qx, qy, qz, r;
+    float scratch[16];
+    const float *cp = hairobb__segment_points(rs->bvh, prim, rs->time, scratch);
+    int slot, list, exit;
+    hairobb__ray_points_v4(rs->org, cp, &qx, &qy, &qz, &r);
+    hairobb__v4_store(c.x, hairobb__ray_row_v4(rs, 0, qx, qy, qz));
+    hairobb__v4_store(c.y, hairobb__ray_row_v4(rs, 1, qx, qy, qz));
+    hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));
+    hairobb__v4_store(c.r, r);
+    /* the hit first: a tube's side is its normal's (a ribbon's faces the ray) */
+    hairobb__hit_at(rs->bvh, rs, prim, NULL, &c, u, t, rs->cap_candidate, &hit);
+    exit = hairobb__is_tube(rs->bvh, prim) && hairobb__dot3(hit.Ng, rs->dir) > 0.0f;
+    if (hairobb__ignored_before(rs, prim, u, t, exit, cp)) return 1;
+    if (rs->placed) hairobb__hit_to_world(rs->placed, rs->instance_id, &hit);
+    if ((!rs->hit_filter || rs->hit_filter(rs->hit_filter_user, rs->ray, &hit)) &&
+        (!rs->call_filter || rs->call_filter(rs->call_filter_user, rs->ray, &hit)))
+        return 0;
+    for (list = 0; list < 2; ++list) {
+        if (list == 1 && u > 1.0f / 1024.0f && u < 1.0f - 1.0f / 1024.0f) break;
+        slot = rs->ignored_count[list]++ % HAIROBB__SHOWN;
+        rs->ignored_prim[list][slot] = prim;
+        rs->ignored_u[list][slot] = u;
+        rs->ignored_t[list][slot] = t;
+        rs->ignored_exit[list][slot] = exit;
+    }
+    return 1;
+}
+
 /* Records the hit if the ribbon point (x, y) covers the ray axis within
    radius r and t is in [tnear, tfar]: the nearest hit so far. Of two
    segments hit at the same t the smaller index wins, whatever the tree. */
-/* out of line: accept stays small where no filter is set */
-HAIROBB__COLD static int hairobb__hit_filtered_out(hairobb__ray_state *rs, uint32_t prim, float u, float t);
-
 static int hairobb__accept(hairobb__ray_state *rs, uint32_t prim, float u, float t, float x, float y, float r)
 {
     if (!(x * x + y * y <= r * r) || !(t >= rs->tnear) || !(t <= rs->tfar)) return 0;
@@ -7836,21 +7711,21 @@ static int hairobb__accept(hairobb__ray_state *rs, uint32_t prim, float u, float
     return 1;
 }
 
-/* hairobb__bezier's value and first derivative for 4 curves at once, one
-   per lane, rounded as it rounds: rows p0..p3 hold the control points. */
-HAIROBB__INLINE void hairobb__bezier_v4(hairobb__v4 p0, hairobb__v4 p1, hairobb__v4 p2, hairobb__v4 p3, float u,
-                               hairobb__v4 *value, hairobb__v4 *d1)
+/* ------------------------------------------------------------------------ */
+/* >>ribbon  Ribbons: the pieces, their roots, the polish                   */
+/* ------------------------------------------------------------------------ */
+/* f(u) = dot(P2, P2') vanishes where the ribbon faces the ray; f'(u) too. */
+static float hairobb__ribbon_f(const hairobb__ray_poly *c, float u, float *derivative)
 {
-    float s = 1.0f - u;
-    hairobb__v4 e0 = hairobb__v4_sub(p1, p0), e1 = hairobb__v4_sub(p2, p1), e2 = hairobb__v4_sub(p3, p2);
-    *d1 = hairobb__v4_mul(hairobb__v4_set1(3.0f),
-                          hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(s * s), e0),
-                                                          hairobb__v4_mul(hairobb__v4_set1(2.0f * u * s), e1)),
-                                          hairobb__v4_mul(hairobb__v4_set1(u * u), e2)));
-    *value = hairobb__v4_add(hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(s * s * s), p0),
-                                                             hairobb__v4_mul(hairobb__v4_set1(3.0f * u * s * s), p1)),
-                                             hairobb__v4_mul(hairobb__v4_set1(3.0f * u * u * s), p2)),
-                             hairobb__v4_mul(hairobb__v4_set1(u * u * u), p3));
+    hairobb__v4 d1, d2, value = hairobb__horner(c, hairobb__v4_set1(u), &d1, &d2);
+    float products[4], squares[4], second[4];
+    hairobb__v4_store(products, hairobb__v4_mul(value, d1));
+    if (derivative) {
+        hairobb__v4_store(squares, hairobb__v4_mul(d1, d1));
+        hairobb__v4_store(second, hairobb__v4_mul(value, d2));
+        *derivative = squares[0] + squares[1] + second[0] + second[1];
+    }
+    return products[0] + products[1];
 }
 
 /* The depth of a ribbon's root at u on the segment of world points cp,
@@ -8179,6 +8054,9 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
     return found;
 }
 
+/* ------------------------------------------------------------------------ */
+/* >>tube  Tubes: inside intervals and both sheets' roots                   */
+/* ------------------------------------------------------------------------ */
 /* Round curves (HAIROBB_SHAPE_ROUND): the tube swept by a circle of radius
    r(u) about the centre line in the plane normal to its tangent. In ray
    space, with P2 = (x, y) and w = x x' + y y', that plane meets the ray at
@@ -8794,6 +8672,9 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
     return found;
 }
 
+/* ------------------------------------------------------------------------ */
+/* >>segment  A segment's cull, and a leaf's segments                       */
+/* ------------------------------------------------------------------------ */
 /* One segment: moved into ray space and culled by its control polygon (the
    ribbon lies in its hull dilated by the largest radius), then the pieces.
    (Culling 4 segments at once with SIMD measured slower: leaves hold
@@ -8938,184 +8819,317 @@ static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *r
     return found;
 }
 
-
-/* A tube's hit attributes, in world space from the segment's points cp:
-   the tangent dP/du; v, the ribbon's formula at the tube's point X (the
-   signed offset of the ray from the centre line across the fibre, over r);
-   and the outward unit normal, the gradient of |X - c(u(X))|^2 -
-   r(u(X))^2 with its curvature term: R - r r' c' / (|c'|^2 - R.c''), R = X
-   - c(u). */
-static void hairobb__tube_hit_at(const hairobb__ray_state *rs, const float *cp, float u, float t, int cap, hairobb_hit *hit)
+/* ------------------------------------------------------------------------ */
+/* >>traversal  Traversal: node tests, nearest first                        */
+/* ------------------------------------------------------------------------ */
+HAIROBB__INLINE hairobb__vn hairobb__far_scale(hairobb__vn tfar)
 {
-    float s = 1.0f - u, b[4], db[4], d2b[4], C[4], T[4], T2[4], r, dr;
-    float R[3], n[3], cross[3], along, tperp2, denominator, scale;
-    const float *unit_dir = rs->frame + 6;
-    hairobb__v4 value, tangent, second;
-    int i, k;
-    b[0] = s * s * s; b[1] = 3.0f * u * s * s; b[2] = 3.0f * u * u * s; b[3] = u * u * u;
-    db[0] = -3.0f * s * s; db[1] = 3.0f * s * s - 6.0f * u * s; db[2] = 6.0f * u * s - 3.0f * u * u; db[3] = 3.0f * u * u;
-    d2b[0] = 6.0f * s; d2b[1] = 6.0f * u - 12.0f * s; d2b[2] = 6.0f * s - 12.0f * u; d2b[3] = 6.0f * u;
-    /* the sums over control points in order, x, y, z and r in the lanes
-       (a lane rounds as a scalar sum from 0 would) */
-    value = tangent = second = hairobb__v4_set1(0.0f);   /* 0 + -0 is +0, as a scalar sum from 0 */
-    for (i = 0; i < 4; ++i) {
-        hairobb__v4 point = hairobb__v4_load(cp + 4 * i);
-        value = hairobb__v4_add(value, hairobb__v4_mul(hairobb__v4_set1(b[i]), point));
-        tangent = hairobb__v4_add(tangent, hairobb__v4_mul(hairobb__v4_set1(db[i]), point));
-        second = hairobb__v4_add(second, hairobb__v4_mul(hairobb__v4_set1(d2b[i]), point));
-    }
-    hairobb__v4_store(C, value);
-    hairobb__v4_store(T, tangent);
-    hairobb__v4_store(T2, second);
-    r = hairobb__maxf(C[3], 0.0f);
-    dr = T[3];
-    for (k = 0; k < 3; ++k) R[k] = rs->org[k] + t * rs->dir[k] - C[k];
-    memcpy(hit->tangent, T, sizeof hit->tangent);
-    denominator = hairobb__dot3(T, T) - hairobb__dot3(R, T2);
-    scale = denominator != 0.0f ? r * dr / denominator : 0.0f;
-    for (k = 0; k < 3; ++k) n[k] = cap ? (u > 0.5f ? T[k] : -T[k]) : R[k] - scale * T[k];   /* a cap: along the strand, out */
-    if (!hairobb__normalize3(n))   /* degenerate: against the ray */
-        for (k = 0; k < 3; ++k) n[k] = -unit_dir[k];
-    for (k = 0; k < 3; ++k) hit->Ng[k] = n[k];
-    along = hairobb__dot3(T, unit_dir);
-    tperp2 = hairobb__dot3(T, T) - along * along;
-    cross[0] = T[1] * R[2] - T[2] * R[1];
-    cross[1] = T[2] * R[0] - T[0] * R[2];
-    cross[2] = T[0] * R[1] - T[1] * R[0];
-    hit->v = 0.0f;
-    if (r > 0.0f && tperp2 > 0.0f) {
-        hit->v = hairobb__dot3(cross, unit_dir) / (sqrtf(tperp2) * r);
-        hit->v = hairobb__maxf(-1.0f, hairobb__minf(1.0f, hit->v));
-    }
+    return hairobb__vn_mul(tfar, hairobb__vn_set1(HAIROBB__FAR_SCALE));
 }
 
-/* Hit attributes of the hit at u, t on segment prim, c in ray space:
-   computed once for the final hit, and for each one a hit filter is shown. */
-/* A hit's ids: its group and the segment's index in it (a scene maps
-   instance_id after). */
-HAIROBB__INLINE void hairobb__hit_ids(const hairobb_bvh *bvh, uint32_t prim, hairobb_hit *hit)
+/* Slab test of a node's boxes in the slab ray's frame; planes points at
+   lower[3][W], followed by upper[3][W] ([axis][child] arrays). */
+HAIROBB__INLINE int hairobb__intersect_boxes(const float *planes, const hairobb__slab_ray *slab,
+                                             const hairobb__ray_state *rs, float dist[HAIROBB__W])
 {
-    uint32_t group = hairobb__group_of(bvh, prim);
-    hit->group_id = group;
-    hit->prim_id = bvh->group_first ? prim - bvh->group_first[group] : prim;
-    hit->instance_id = HAIROBB_INVALID_ID;
+    hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
+#define HAIROBB__SLAB_AXIS(k) do { \
+        hairobb__vn o = hairobb__vn_set1(slab->org[k]), r = hairobb__vn_set1(slab->rdir[k]); \
+        tn = hairobb__vn_max(hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_load(planes + slab->near_plane[k]), o), r), tn); \
+        tf = hairobb__vn_min(hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_load(planes + slab->far_plane[k]), o), r), tf); \
+    } while (0)
+    HAIROBB__SLAB_AXIS(0);   /* written out, as in hairobb__intersect_compressed_obb_node */
+    HAIROBB__SLAB_AXIS(1);
+    HAIROBB__SLAB_AXIS(2);
+#undef HAIROBB__SLAB_AXIS
+    hairobb__vn_store(dist, tn);
+    return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
 }
 
-static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint32_t prim, const float *points,
-                            const hairobb__ray_curve *c, float u, float t, int cap, hairobb_hit *hit)
+/* The ray rotated once into the node's frame; rotation preserves t. */
+static int hairobb__intersect_rotated_node(const hairobb__rotated_node *node, const hairobb__ray_state *rs, float dist[HAIROBB__W])
 {
-    float scratch[16];
-    const float *cp = points ? points : hairobb__segment_points(bvh, prim, rs->time, scratch);
-    if (hairobb__is_tube(bvh, prim)) {
-        hairobb__tube_hit_at(rs, cp, u, t, cap, hit);
-        hit->t = t;
-        hit->u = u;
-        hairobb__hit_ids(bvh, prim, hit);
-        return;
+    hairobb__slab_ray slab;
+    float org[3], dir[3], moved[3];
+    int k;
+    for (k = 0; k < 3; ++k) moved[k] = rs->org[k] - node->centre[k];
+    for (k = 0; k < 3; ++k) {
+        org[k] = hairobb__dot3(node->rotation + 3 * k, moved);
+        dir[k] = hairobb__dot3(node->rotation + 3 * k, rs->dir);
     }
-    hairobb__v4 x4 = hairobb__v4_load(c->x), y4 = hairobb__v4_load(c->y), z4 = hairobb__v4_set1(0.0f), r4 = hairobb__v4_load(c->r);
-    hairobb__v4 value, d1, tangent, neg_dir, n4;
-    float at[4], tangent_at[4], tangent_xy[2], x, y, r, tlen2, along, n[4];
-    const float *unit_dir = rs->frame + 6;
-    hairobb__bezier_v4(hairobb__v4_load(cp), hairobb__v4_load(cp + 4), hairobb__v4_load(cp + 8), hairobb__v4_load(cp + 12),
-                       u, &value, &tangent);
-    hairobb__v4_store(tangent_at, tangent);
-    memcpy(hit->tangent, tangent_at, sizeof hit->tangent);
-    hairobb__v4_transpose(&x4, &y4, &z4, &r4);     /* rows: control points (x, y, 0, r): z is not needed */
-    hairobb__bezier_v4(x4, y4, z4, r4, u, &value, &d1);
-    hairobb__v4_store(at, value);
-    hairobb__v4_store(tangent_at, d1);
-    x = at[0]; y = at[1]; r = at[3];
-    tangent_xy[0] = tangent_at[0]; tangent_xy[1] = tangent_at[1];
-    tlen2 = tangent_xy[0] * tangent_xy[0] + tangent_xy[1] * tangent_xy[1];
-    hit->v = 0.0f;
-    if (r > 0.0f && tlen2 > 0.0f) {
-        hit->v = (tangent_xy[1] * x - tangent_xy[0] * y) / (sqrtf(tlen2) * r);
-        hit->v = hairobb__maxf(-1.0f, hairobb__minf(1.0f, hit->v));
-    }
-    /* the ribbon's normal: -dir without its component along the tangent
-       (lanes x, y, z; lane 3 is not used) */
-    along = hairobb__dot3(unit_dir, hit->tangent);
-    tlen2 = hairobb__dot3(hit->tangent, hit->tangent);
-    neg_dir = hairobb__v4_set3(-unit_dir[0], -unit_dir[1], -unit_dir[2]);
-    n4 = hairobb__v4_add(neg_dir, tlen2 > 0.0f ? hairobb__v4_div(hairobb__v4_mul(hairobb__v4_set1(along), tangent), hairobb__v4_set1(tlen2))
-                                               : hairobb__v4_set1(0.0f));
-    hairobb__v4_store(n, n4);
-    if (!hairobb__normalize3(n)) hairobb__v4_store(n, neg_dir);   /* the ray along the tangent: against the ray */
-    memcpy(hit->Ng, n, sizeof hit->Ng);
-    hit->t = t;
-    hit->u = u;
-    hairobb__hit_ids(bvh, prim, hit);
+    hairobb__slab_setup(&slab, org, dir);
+    return hairobb__intersect_boxes(node->lower[0], &slab, rs, dist);
 }
 
-/* The segment is moved to ray space again: the intersector's copy is not
-   at hand in hairobb__accept. */
-/* Whether the neighbour in index order begins (end 1) or ends (end 0)
-   where this segment's end point is: a joint, smooth or a kink. */
-static int hairobb__shares_end(const hairobb_bvh *bvh, uint32_t prim, int end, float time, const float *cp)
+/* Bytes decoded to the planes the builder checked; the ray moved to the
+   node's centre, and rotated by the decoded frame for a rotated node. The
+   byte planes lower[3][W], upper[3][W] are laid out as the float ones, so
+   the slab ray's plane offsets index them too. */
+HAIROBB__INLINE int hairobb__intersect_compressed_node(const hairobb__compressed_node *node, int rotated,
+                                                       const signed char *end_planes, const hairobb__ray_state *rs,
+                                                       float dist[HAIROBB__W])
 {
-    float scratch[16];
-    const float *q;
-    if ((end ? (size_t)prim + 1 >= bvh->segment_count : prim == 0) || !hairobb__same_group(bvh, prim, end)) return 0;
-    q = hairobb__segment_points(bvh, end ? prim + 1 : prim - 1, time, scratch) + 12 * (1 - end);
-    cp += 12 * end;
-    return cp[0] == q[0] && cp[1] == q[1] && cp[2] == q[2];
-}
-
-/* Whether the filters ignored this crossing already (HAIROBB__SHOWN): the
-   same segment within 2^-10 of u, or at a joint the neighbour's matching
-   end, at a t within r / 64 of the segment (plus t's rounding), on the
-   same side of a tube (exit: 1 where the ray leaves it; ribbons 0). */
-static int hairobb__ignored_before(const hairobb__ray_state *rs, uint32_t prim, float u, float t, int exit, const float *cp)
-{
-    const float near_end = 1.0f / 1024.0f;
-    float close = hairobb__maxf(cp[3], cp[15]) * (1.0f / 64.0f) * rs->inv_dir_length + fabsf(t) * (1.0f / 65536.0f);
-    int end = u <= near_end ? 0 : u >= 1.0f - near_end ? 1 : -1, list, i;
-    for (list = 0; list < 2; ++list) {
-        int kept = rs->ignored_count[list] < HAIROBB__SHOWN ? rs->ignored_count[list] : HAIROBB__SHOWN;
-        for (i = 0; i < kept; ++i) {
-            uint32_t other = rs->ignored_prim[list][i];
-            float other_u = rs->ignored_u[list][i];
-            if (!(fabsf(rs->ignored_t[list][i] - t) <= close) || rs->ignored_exit[list][i] != exit) continue;
-            if (other == prim && fabsf(other_u - u) <= near_end) return 1;
-            if (end == 1 && other == prim + 1 && other_u <= near_end && hairobb__shares_end(rs->bvh, prim, 1, rs->time, cp)) return 1;
-            if (end == 0 && other + 1 == prim && other_u >= 1.0f - near_end && hairobb__shares_end(rs->bvh, prim, 0, rs->time, cp))
-                return 1;
+    hairobb__slab_ray slab;
+    hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar), tau = hairobb__vn_set1(rs->time);
+    const signed char *planes = node->lower[0];
+    float moved[3];
+    int k;
+    for (k = 0; k < 3; ++k) moved[k] = rs->org[k] - node->centre[k];
+    if (rotated) {
+        float frame[9], org[3], dir[3];
+        hairobb__decode_rotation(node->rotation, frame);
+        for (k = 0; k < 3; ++k) {
+            org[k] = hairobb__dot3(frame + 3 * k, moved);
+            dir[k] = hairobb__dot3(frame + 3 * k, rs->dir);
         }
+        hairobb__slab_setup(&slab, org, dir);
+    } else {
+        slab = rs->world;
+        memcpy(slab.org, moved, sizeof moved);
     }
-    return 0;
+    for (k = 0; k < 3; ++k) {
+        hairobb__vn o = hairobb__vn_set1(slab.org[k]), r = hairobb__vn_set1(slab.rdir[k]), step = hairobb__vn_set1(node->step[k]);
+        hairobb__vn near_plane = hairobb__vn_from_bytes(planes + slab.near_plane[k]);
+        hairobb__vn far_plane = hairobb__vn_from_bytes(planes + slab.far_plane[k]);
+        if (end_planes) {   /* moving: the planes lerped to the ray's time, in steps */
+            near_plane = hairobb__vn_add(near_plane, hairobb__vn_mul(tau, hairobb__vn_sub(hairobb__vn_from_bytes(end_planes + slab.near_plane[k]), near_plane)));
+            far_plane = hairobb__vn_add(far_plane, hairobb__vn_mul(tau, hairobb__vn_sub(hairobb__vn_from_bytes(end_planes + slab.far_plane[k]), far_plane)));
+        }
+        near_plane = hairobb__vn_mul(near_plane, step);
+        far_plane = hairobb__vn_mul(far_plane, step);
+        tn = hairobb__vn_max(hairobb__vn_mul(hairobb__vn_sub(near_plane, o), r), tn);
+        tf = hairobb__vn_min(hairobb__vn_mul(hairobb__vn_sub(far_plane, o), r), tf);
+    }
+    hairobb__vn_store(dist, tn);
+    return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
 }
 
-static int hairobb__hit_filtered_out(hairobb__ray_state *rs, uint32_t prim, float u, float t)
+/* Each child's rotation decoded as in the builder, the ray transformed per
+   child (lanes), then slab tests against its decoded byte planes. 1/d is
+   not clamped: where d = 0 it is +-inf, which puts t at +-inf (the ray
+   outside or inside the slab, as it is), or at NaN on a plane, and min and
+   max then keep the other operand (SSE's NaN rule, which the plain C twins
+   share): a slab the ray runs along does not cut its interval. The axes are
+   written out: a loop over them costs 4 instructions an axis. */
+HAIROBB__INLINE int hairobb__intersect_compressed_obb_node(const hairobb__compressed_obb_node *node,
+                                                           const signed char *end_planes, const hairobb__ray_state *rs,
+                                                           float dist[HAIROBB__W])
 {
-    hairobb_hit hit;
-    hairobb__ray_curve c;
-    hairobb__v4 qx, qy, qz, r;
-    float scratch[16];
-    const float *cp = hairobb__segment_points(rs->bvh, prim, rs->time, scratch);
-    int slot, list, exit;
-    hairobb__ray_points_v4(rs->org, cp, &qx, &qy, &qz, &r);
-    hairobb__v4_store(c.x, hairobb__ray_row_v4(rs, 0, qx, qy, qz));
-    hairobb__v4_store(c.y, hairobb__ray_row_v4(rs, 1, qx, qy, qz));
-    hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));
-    hairobb__v4_store(c.r, r);
-    /* the hit first: a tube's side is its normal's (a ribbon's faces the ray) */
-    hairobb__hit_at(rs->bvh, rs, prim, NULL, &c, u, t, rs->cap_candidate, &hit);
-    exit = hairobb__is_tube(rs->bvh, prim) && hairobb__dot3(hit.Ng, rs->dir) > 0.0f;
-    if (hairobb__ignored_before(rs, prim, u, t, exit, cp)) return 1;
-    if (rs->placed) hairobb__hit_to_world(rs->placed, rs->instance_id, &hit);
-    if ((!rs->hit_filter || rs->hit_filter(rs->hit_filter_user, rs->ray, &hit)) &&
-        (!rs->call_filter || rs->call_filter(rs->call_filter_user, rs->ray, &hit)))
-        return 0;
-    for (list = 0; list < 2; ++list) {
-        if (list == 1 && u > 1.0f / 1024.0f && u < 1.0f - 1.0f / 1024.0f) break;
-        slot = rs->ignored_count[list]++ % HAIROBB__SHOWN;
-        rs->ignored_prim[list][slot] = prim;
-        rs->ignored_u[list][slot] = u;
-        rs->ignored_t[list][slot] = t;
-        rs->ignored_exit[list][slot] = exit;
+    hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar), tau = hairobb__vn_set1(rs->time);
+    hairobb__vn ox = hairobb__vn_set1(rs->org[0] - node->centre[0]), oy = hairobb__vn_set1(rs->org[1] - node->centre[1]);
+    hairobb__vn oz = hairobb__vn_set1(rs->org[2] - node->centre[2]);
+    hairobb__vn dx = hairobb__vn_set1(rs->dir[0]), dy = hairobb__vn_set1(rs->dir[1]), dz = hairobb__vn_set1(rs->dir[2]);
+    hairobb__vn one = hairobb__vn_set1(1.0f);
+#define HAIROBB__QOBB_AXIS(k) do { \
+        hairobb__vn m0 = hairobb__vn_from_bytes(node->rotation[3 * (k)]), m1 = hairobb__vn_from_bytes(node->rotation[3 * (k) + 1]); \
+        hairobb__vn m2 = hairobb__vn_from_bytes(node->rotation[3 * (k) + 2]); \
+        hairobb__vn o = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, ox), hairobb__vn_mul(m1, oy)), hairobb__vn_mul(m2, oz)); \
+        hairobb__vn d = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, dx), hairobb__vn_mul(m1, dy)), hairobb__vn_mul(m2, dz)); \
+        hairobb__vn r = hairobb__vn_div(one, d), step = hairobb__vn_set1(node->step[k]); \
+        hairobb__vn lo = hairobb__vn_from_bytes(node->lower[k]), hi = hairobb__vn_from_bytes(node->upper[k]), t0, t1; \
+        if (end_planes) {   /* moving: the planes lerped to the ray's time, in steps */ \
+            lo = hairobb__vn_add(lo, hairobb__vn_mul(tau, hairobb__vn_sub(hairobb__vn_from_bytes(end_planes + (k) * HAIROBB__W), lo))); \
+            hi = hairobb__vn_add(hi, hairobb__vn_mul(tau, hairobb__vn_sub(hairobb__vn_from_bytes(end_planes + (3 + (k)) * HAIROBB__W), hi))); \
+        } \
+        t0 = hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_mul(lo, step), o), r); \
+        t1 = hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_mul(hi, step), o), r); \
+        tn = hairobb__vn_max(hairobb__vn_min(t0, t1), tn); \
+        tf = hairobb__vn_min(hairobb__vn_max(t0, t1), tf); \
+    } while (0)
+    HAIROBB__QOBB_AXIS(0);
+    HAIROBB__QOBB_AXIS(1);
+    HAIROBB__QOBB_AXIS(2);
+#undef HAIROBB__QOBB_AXIS
+    hairobb__vn_store(dist, tn);
+    return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
+}
+
+/* Each child's slab pair along a row of its map is [0, 1] in unit space;
+   1/d unclamped, as in hairobb__intersect_compressed_obb_node. */
+HAIROBB__INLINE int hairobb__intersect_obb_node(const hairobb__obb_node *node, const hairobb__ray_state *rs, float dist[HAIROBB__W])
+{
+    hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
+    hairobb__vn one = hairobb__vn_set1(1.0f), zero = hairobb__vn_set1(0.0f);
+    hairobb__vn ox = hairobb__vn_set1(rs->org[0] - node->centre[0]), oy = hairobb__vn_set1(rs->org[1] - node->centre[1]);
+    hairobb__vn oz = hairobb__vn_set1(rs->org[2] - node->centre[2]);
+    hairobb__vn dx = hairobb__vn_set1(rs->dir[0]), dy = hairobb__vn_set1(rs->dir[1]), dz = hairobb__vn_set1(rs->dir[2]);
+#define HAIROBB__OBB_ROW(row) do { \
+        hairobb__vn m0 = hairobb__vn_load(node->xfm[3 * (row)]), m1 = hairobb__vn_load(node->xfm[3 * (row) + 1]); \
+        hairobb__vn m2 = hairobb__vn_load(node->xfm[3 * (row) + 2]), m3 = hairobb__vn_load(node->xfm[9 + (row)]); \
+        hairobb__vn o = hairobb__vn_add(hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, ox), hairobb__vn_mul(m1, oy)), hairobb__vn_mul(m2, oz)), m3); \
+        hairobb__vn d = hairobb__vn_add(hairobb__vn_add(hairobb__vn_mul(m0, dx), hairobb__vn_mul(m1, dy)), hairobb__vn_mul(m2, dz)); \
+        hairobb__vn r = hairobb__vn_div(one, d); \
+        hairobb__vn t0 = hairobb__vn_mul(hairobb__vn_sub(zero, o), r); \
+        hairobb__vn t1 = hairobb__vn_mul(hairobb__vn_sub(one, o), r); \
+        tn = hairobb__vn_max(hairobb__vn_min(t0, t1), tn); \
+        tf = hairobb__vn_min(hairobb__vn_max(t0, t1), tf); \
+    } while (0)
+    HAIROBB__OBB_ROW(0);
+    HAIROBB__OBB_ROW(1);
+    HAIROBB__OBB_ROW(2);
+#undef HAIROBB__OBB_ROW
+    hairobb__vn_store(dist, tn);
+    return hairobb__vn_le_bits(tn, hairobb__far_scale(tf));
+}
+
+/* A child pushed on the stack waits at least one node test: its first lines
+   (a node's planes; a leaf's first copied segment) are asked for now. */
+HAIROBB__INLINE void hairobb__prefetch_child(const hairobb_bvh *bvh, uint64_t ref)
+{
+    if (HAIROBB__REF_TYPE(ref) == HAIROBB__REF_LEAF) {
+        if (bvh->leaf_points) HAIROBB__PREFETCH(bvh->leaf_points + 16 * (size_t)(ref >> 8));
+    } else {
+        const unsigned char *node = HAIROBB__NODE_AT(bvh->nodes, ref);
+        HAIROBB__PREFETCH(node);
+        HAIROBB__PREFETCH(node + 64);
+        HAIROBB__PREFETCH(node + 128);
     }
-    return 1;
+}
+
+/* The node types other than the default layout's (per-child compressed
+   OBB, AABB) and leaves: out of line, so that the loop tests its three
+   common types with two well-predicted compares instead of a jump table. */
+static HAIROBB__NOINLINE int hairobb__intersect_other_node(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint64_t ref,
+                                                           float dist[HAIROBB__W], const uint64_t **child)
+{
+    unsigned type = HAIROBB__REF_TYPE(ref);
+    const void *node;
+    if (type == HAIROBB__REF_EMPTY) {
+        *child = NULL;
+        return 0;
+    }
+    node = HAIROBB__NODE_AT(bvh->nodes, ref);
+    if (type == HAIROBB__REF_QAABB || type == HAIROBB__REF_QOBB) {
+        *child = HAIROBB__CAST(const hairobb__compressed_node *, node)->child;
+        return hairobb__intersect_compressed_node(HAIROBB__CAST(const hairobb__compressed_node *, node), type == HAIROBB__REF_QOBB,
+                                                  NULL, rs, dist);
+    }
+    if (type == HAIROBB__REF_ROTATED) {
+        *child = HAIROBB__CAST(const hairobb__rotated_node *, node)->child;
+        return hairobb__intersect_rotated_node(HAIROBB__CAST(const hairobb__rotated_node *, node), rs, dist);
+    }
+    if (type == HAIROBB__REF_QOBB_PER_CHILD_MB) {   /* moving hair's nodes: the planes at time 1 follow */
+        *child = HAIROBB__CAST(const hairobb__compressed_obb_node *, node)->child;
+        return hairobb__intersect_compressed_obb_node(HAIROBB__CAST(const hairobb__compressed_obb_node *, node),
+                                                      HAIROBB__CAST(const signed char *, node) + sizeof(hairobb__compressed_obb_node), rs, dist);
+    }
+    if (type == HAIROBB__REF_QAABB_MB || type == HAIROBB__REF_QOBB_MB) {
+        *child = HAIROBB__CAST(const hairobb__compressed_node *, node)->child;
+        return hairobb__intersect_compressed_node(HAIROBB__CAST(const hairobb__compressed_node *, node), type == HAIROBB__REF_QOBB_MB,
+                                                  HAIROBB__CAST(const signed char *, node) + sizeof(hairobb__compressed_node), rs, dist);
+    }
+    *child = HAIROBB__CAST(const hairobb__obb_node *, node)->child;
+    return hairobb__intersect_obb_node(HAIROBB__CAST(const hairobb__obb_node *, node), rs, dist);
+}
+
+/* Nearest-first traversal; any_hit stops at the first hit. A node with
+   several hit children pushes them all, sorted so that the nearest is on
+   top, and goes on with that one. */
+static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int any_hit)
+{
+    uint64_t stack_ref[HAIROBB__STACK];
+    float stack_dist[HAIROBB__STACK];
+    int sp = 0, found = 0;
+    uint64_t ref = bvh->root;
+    rs->any_hit = any_hit;
+    for (;;) {
+        /* the default layout's types and leaves first, a compare each; the rest out of line */
+        unsigned type = HAIROBB__REF_TYPE(ref);
+        const void *node;   /* set for inner nodes only: a one-leaf tree has no node memory */
+        const uint64_t *child;
+        float dist[HAIROBB__W];
+        int bits, i;
+        if (type == HAIROBB__REF_QOBB_PER_CHILD) {
+            node = HAIROBB__NODE_AT(bvh->nodes, ref);
+            bits = hairobb__intersect_compressed_obb_node(HAIROBB__CAST(const hairobb__compressed_obb_node *, node), NULL, rs, dist);
+            child = HAIROBB__CAST(const hairobb__compressed_obb_node *, node)->child;
+        } else if (type == HAIROBB__REF_LEAF) {
+            HAIROBB__COUNT(leaf);
+            if (hairobb__intersect_leaf(bvh, rs, ref, any_hit)) {
+                found = 1;
+                if (any_hit) return 1;
+            }
+            bits = 0;
+            child = NULL;
+        } else if (type == HAIROBB__REF_AABB) {
+            const hairobb__aabb_node *aabb = HAIROBB__CAST(const hairobb__aabb_node *, (const void *)HAIROBB__NODE_AT(bvh->nodes, ref));
+            bits = hairobb__intersect_boxes(aabb->lower[0], &rs->world, rs, dist);
+            child = aabb->child;
+        } else {
+            bits = hairobb__intersect_other_node(bvh, rs, ref, dist, &child);
+        }
+        if (child) HAIROBB__COUNT(node);
+        if (bits) {
+            int base = sp;
+            unsigned rest = (unsigned)bits & ((unsigned)bits - 1u);
+            if (!(rest & (rest - 1u))) {
+                /* one or two hit children (most visits that hit any):
+                   which of the two it is picks values,
+                   not a branch; the farther one is pushed, and taken off
+                   at once where it is the nearer (one hit) */
+                int a = hairobb__lowest_bit((unsigned)bits), b = hairobb__highest_bit((unsigned)bits);
+                int a_first = dist[a] < dist[b];      /* as the sort below orders them */
+                stack_ref[sp] = a_first ? child[b] : child[a];
+                stack_dist[sp] = a_first ? dist[b] : dist[a];
+                ref = a_first ? child[a] : child[b];
+                sp += rest != 0;
+                continue;
+            }
+            i = hairobb__lowest_bit((unsigned)bits);
+            bits &= bits - 1;
+            if (any_hit) {
+                /* any hit ends the ray: the nearest child goes first (on
+                   crossing hair unsorted order cost a fifth of the shadow
+                   rays' speed), the others wait unsorted */
+                float nearest = dist[i];
+                ref = child[i];
+                do {
+                    int j = hairobb__lowest_bit((unsigned)bits);
+                    int nearer = dist[j] < nearest;
+                    bits &= bits - 1;
+                    stack_ref[sp] = nearer ? ref : child[j];
+                    stack_dist[sp] = nearer ? nearest : dist[j];
+                    hairobb__prefetch_child(bvh, stack_ref[sp]);
+                    ref = nearer ? child[j] : ref;
+                    nearest = nearer ? dist[j] : nearest;
+                    ++sp;
+                } while (bits);
+                continue;
+            }
+            /* three or more: onto the stack sorted, nearest on top, equal
+               distances in child order (the higher index above). Each
+               child's place is its rank, the hit children farther than it
+               or as near with a lower index, counted by two compares over
+               the node's lanes: no branch on the distances, where an
+               insertion sort mispredicts about once a child */
+            {
+                hairobb__vn lanes = hairobb__vn_load(dist);
+                unsigned hits = (unsigned)bits | (1u << i), left = hits;
+                do {
+                    int j = hairobb__lowest_bit(left);
+                    hairobb__vn dj = hairobb__vn_set1(dist[j]);
+                    unsigned not_nearer = (unsigned)hairobb__vn_le_bits(dj, lanes);
+                    unsigned not_farther = (unsigned)hairobb__vn_le_bits(lanes, dj);
+                    int at = base + hairobb__bit_count(not_nearer & ~(not_farther & ~((1u << j) - 1u)) & hits);
+                    left &= left - 1u;
+                    stack_ref[at] = child[j];
+                    stack_dist[at] = dist[j];
+                    hairobb__prefetch_child(bvh, child[j]);
+                } while (left);
+                sp = base + hairobb__bit_count(hits) - 1;
+            }
+            ref = stack_ref[sp];
+            continue;
+        }
+        /* widened as the node tests widen tfar: a child pushed before tfar
+           shrank is dropped only where its test would now cull it, so the
+           hits found do not depend on the order children are visited in */
+        do {
+            if (sp == 0) return found;
+            --sp;
+        } while (stack_dist[sp] > rs->tfar * HAIROBB__FAR_SCALE);
+        ref = stack_ref[sp];
+    }
 }
 
 #ifndef HAIROBB__KERNEL_PASS
