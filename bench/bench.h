@@ -94,6 +94,15 @@ typedef enum strand_order {
 } strand_order;
 extern const char *const strand_order_names[STRAND_ORDER_COUNT];
 
+/* --groups-shape: the surfaces --groups builds its rows as, a bit each in
+   options.groups_shapes (options.c names them) */
+typedef enum groups_shape {
+    GROUPS_SHAPE_RIBBON,    /* hairobb's ribbons, Embree's flat Bezier curves */
+    GROUPS_SHAPE_ROUND,     /* tubes: HAIROBB_SHAPE_ROUND, Embree's round Bezier curves */
+    GROUPS_SHAPE_COUNT
+} groups_shape;
+extern const char *const groups_shape_names[GROUPS_SHAPE_COUNT];
+
 typedef struct options {
     const char *scenes[MAX_SCENES];
     size_t scene_segments[MAX_SCENES]; /* NAME:N in --scene (and --scene scale); 0 = --segments */
@@ -121,6 +130,8 @@ typedef struct options {
     int motion;                     /* --motion: the motion blur study alone */
     int builds;                     /* --builds: the build-time study alone */
     int groups;                     /* --groups: one BVH against the same hair in groups under a scene, alone */
+    unsigned groups_shapes;         /* --groups-shape: bit 1 << GROUPS_SHAPE_* for each surface built (default ribbons) */
+    int groups_shape_given;         /* --groups-shape on the command line (it needs --groups) */
 } options;
 
 /* A scene's arrays as the bench handed them over (layout.c) */

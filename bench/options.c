@@ -13,6 +13,8 @@ enum {
 #define DEFAULT_PNG_PATH "build/bench_error.png"
 #define DEFAULT_PLOT_SCRIPT "bench/plot.gp"
 
+const char *const groups_shape_names[GROUPS_SHAPE_COUNT] = {"ribbon", "round"};
+
 static void print_help(void)
 {
     printf("usage: build/bench [options]   (run from the repository root)\n"
@@ -92,7 +94,13 @@ static void print_help(void)
            "                      (groups as patches) unless --strand-order picks one; build s, bytes/segment,\n"
            "                      instance boxes a primary ray crosses, Mrays/s and ratios to the one BVH\n"
            "                      within rounds (--rays, --threads, --rounds, --res), and each group scene's\n"
-           "                      hits against the one BVH's on every ray\n");
+           "                      hits against the one BVH's on every ray; the same k groups as one BVH\n"
+           "                      (hairobb_build_groups) and Embree's hair as k curve geometries of one scene;\n"
+           "                      the one BVH and each k in 1 BVH built in turn, --rounds rounds on each\n"
+           "                      --threads count: seconds, ratios within rounds, bytes a segment more\n"
+           "  --groups-shape S    what --groups builds every row as: ribbon (hairobb's ribbons, Embree's flat\n"
+           "                      Bezier curves; the default), round (tubes: HAIROBB_SHAPE_ROUND, Embree's round\n"
+           "                      Bezier curves), or both (each scene and order as ribbons, then as tubes)\n");
     printf("  --strand-order O    the order of the strands in the scene's arrays: groom (shuffled whole with a\n"
            "                      fixed seed, as a groom generator writes them and a renderer hands them over; the\n"
            "                      default for procedural scenes), space (sorted by the Morton code of their roots),\n"
@@ -225,6 +233,7 @@ static void default_options(options *o)
         o->thread_counts[o->thread_count_count++] = (unsigned)(cores < 256 ? cores : 256);
     o->variant_list = "all";
     o->strand_order = STRAND_ORDER_UNSET;
+    o->groups_shapes = 1u << GROUPS_SHAPE_RIBBON;
     o->rounds = DEFAULT_ROUNDS;
     o->accuracy_rays = DEFAULT_ACCURACY_RAYS;
     o->tsv_path = DEFAULT_TSV_PATH;
@@ -279,6 +288,14 @@ int parse_options(int argc, char **argv, options *o)
                     o->strand_order = k;
             bad = o->strand_order == STRAND_ORDER_UNSET;
         }
+        else if (strcmp(name, "--groups-shape") == 0) {
+            o->groups_shapes = strcmp(value, "both") == 0 ? (1u << GROUPS_SHAPE_COUNT) - 1 : 0;
+            for (int k = 0; k < GROUPS_SHAPE_COUNT; k++)
+                if (strcmp(value, groups_shape_names[k]) == 0)
+                    o->groups_shapes = 1u << k;
+            bad = o->groups_shapes == 0;
+            o->groups_shape_given = 1;
+        }
         else if (strcmp(name, "--res") == 0) {
             bad = parse_count(value, &count) || count < 1 || count > 16384;
             o->resolution = (int)count;
@@ -330,6 +347,10 @@ int parse_options(int argc, char **argv, options *o)
     }
     if (o->huge_pages && !huge_pages_supported()) {
         fprintf(stderr, "bench: --huge-pages needs Linux's madvise(MADV_HUGEPAGE), which this system lacks\n");
+        return 1;
+    }
+    if (o->groups_shape_given && !o->groups) {
+        fprintf(stderr, "bench: --groups-shape is an option of --groups (see --help)\n");
         return 1;
     }
     if (o->scene_count == 0 && o->groups) { /* --groups: combed at --segments and at 2M */
