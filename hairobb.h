@@ -6744,47 +6744,77 @@ typedef struct hairobb__placed {
     float lower[3], upper[3];            /* world box */
 } hairobb__placed;
 
-typedef struct hairobb__ray_state {
+/* A ray's state while it is traced, in rooms by how long each part lives:
+   call (set once a call: filters, masks, the instance), line (the ray
+   itself; tfar shrinks as hits are found), best (the nearest hit so far),
+   shown (what the filters were shown and ignored), skip (a secondary
+   ray's segment left) and segment (set by a segment's test for the
+   functions it calls, reset after it). */
+typedef struct hairobb__ray_call {
     int filtering;              /* a build-time or per-call filter is set */
     int any_hit;                /* occluded1 */
     hairobb_filter_fn hit_filter, call_filter;   /* the BVH's for this kind of call; the call's */
     void *hit_filter_user, *call_filter_user;
-    int ignored_count[2];       /* candidates the filters ignored: all, those at ends; the last HAIROBB__SHOWN of each: */
-    uint32_t ignored_prim[2][HAIROBB__SHOWN];
-    float ignored_u[2][HAIROBB__SHOWN], ignored_t[2][HAIROBB__SHOWN];
-    int ignored_exit[2][HAIROBB__SHOWN];   /* tubes: the crossing left the fibre (outward Ng along the ray) */
     const hairobb_bvh *bvh;     /* set with a hit filter only: what it is called with */
     const hairobb_ray *ray;     /* the caller's */
+    const hairobb__placed *placed;   /* scenes: the instance traced (its hits go to world space); else NULL */
+    uint32_t instance_id;
+    int cull_back_faces;        /* tubes: back_faces OFF */
+    /* groups (>>groups): the ray's mask, and whether it excludes some group
+       (then each hit's group is looked up) */
+    uint32_t ray_mask;
+    int group_masked;
+    const hairobb_bvh *bvh_groups;    /* the BVH traced, where group_masked */
+} hairobb__ray_call;
+
+typedef struct hairobb__ray_line {
     float org[3], dir[3];
     float tnear, tfar;          /* tfar shrinks to the nearest hit so far */
     float time;                 /* the ray's, for motion-blurred BVHs */
     hairobb__slab_ray world;    /* for AABB nodes */
     float frame[9];             /* rows x, y, z of ray space; z = dir/|dir| */
     float dir_length, inv_dir_length;
-    uint32_t hit_prim;
-    float hit_u;
-    hairobb__ray_curve hit_curve;   /* hit_prim in ray space (intersect1): for its attributes */
-    const float *hit_points;        /* its world points where they stay put (the copy, or Bezier in place); else NULL */
-    /* secondary rays: hits before skip_t on the segment left and on those
-       joined to its ends (positions of its first and last control point)
-       are ignored; skip_t = 0 for other rays */
-    float skip_t;
-    float skip_sheet;           /* tubes: the sheet skipped (+1 entries, -1 exits); 0 ribbons: every hit */
+} hairobb__ray_line;
+
+typedef struct hairobb__ray_best {
+    uint32_t prim;              /* HAIROBB_INVALID_ID until a hit is taken */
+    float u;
+    hairobb__ray_curve curve;   /* prim in ray space (intersect1): for its attributes */
+    const float *points;        /* its world points where they stay put (the copy, or Bezier in place); else NULL */
+    int cap;                    /* tubes: the hit taken is on an end cap */
+} hairobb__ray_best;
+
+typedef struct hairobb__ray_shown {
+    int count[2];               /* candidates the filters ignored: all, those at ends; the last HAIROBB__SHOWN of each: */
+    uint32_t prim[2][HAIROBB__SHOWN];
+    float u[2][HAIROBB__SHOWN], t[2][HAIROBB__SHOWN];
+    int exit[2][HAIROBB__SHOWN];   /* tubes: the crossing left the fibre (outward Ng along the ray) */
+} hairobb__ray_shown;
+
+/* secondary rays: hits before t on the segment left and on those joined
+   to its ends (positions of its first and last control point) are
+   ignored; t = 0 for other rays */
+typedef struct hairobb__ray_skip {
+    float t;
+    float sheet;                /* tubes: the sheet skipped (+1 entries, -1 exits); 0 ribbons: every hit */
+    uint32_t prim;
+    float first[3], last[3];
+    int active;                 /* tubes: set while a skipped segment is tested */
+} hairobb__ray_skip;
+
+typedef struct hairobb__ray_segment {
     float tube_t_base;          /* tubes: t of the point of the ray the segment tested is relative to */
-    const float *segment_points;    /* ribbons: the world points of the segment tested (its roots' t polished on them) */
-    const hairobb__placed *placed;   /* scenes: the instance traced (its hits go to world space); else NULL */
-    uint32_t instance_id;
-    int skipping;               /* tubes: set while a skipped segment is tested */
+    const float *points;        /* ribbons: the world points of the segment tested (its roots' t polished on them) */
     int cap_candidate;          /* tubes: set while an end cap's hit is offered (the filter's hit is the cap's) */
-    int hit_cap;                /* tubes: the hit taken is on an end cap */
-    int cull_back_faces;        /* tubes: back_faces OFF */
-    uint32_t skip_prim;
-    float skip_first[3], skip_last[3];
-    /* groups (>>groups): the ray's mask, and whether it excludes some group
-       (then each segment's group is looked up at the leaf) */
-    uint32_t ray_mask;
-    int group_masked;
-    const hairobb_bvh *bvh_groups;    /* the BVH traced, where group_masked */
+} hairobb__ray_segment;
+
+typedef struct hairobb__ray_state {
+    hairobb__ray_call call;
+    hairobb__ray_line line;
+    hairobb__ray_best best;
+    hairobb__ray_shown shown;
+    hairobb__ray_skip skip;
+    hairobb__ray_segment segment;
 } hairobb__ray_state;
 
 #define HAIROBB__TINY_DIR 1e-18f
@@ -6833,33 +6863,33 @@ static int hairobb__ray_setup(hairobb__ray_state *rs, const hairobb_bvh *bvh, co
 {
     int k;
     float unit[3];
-    rs->filtering = 0;
-    rs->bvh = bvh;
-    rs->ray = ray;
-    memcpy(rs->org, ray->org, sizeof rs->org);
-    memcpy(rs->dir, ray->dir, sizeof rs->dir);
-    hairobb__slab_setup(&rs->world, ray->org, ray->dir);
-    rs->tnear = ray->tnear;
-    rs->tfar = ray->tfar;
-    rs->time = ray->time;
-    rs->hit_prim = HAIROBB_INVALID_ID;
-    rs->hit_points = NULL;
-    rs->hit_u = 0.0f;
-    rs->skip_t = 0.0f;
-    rs->skip_sheet = 0.0f;
-    rs->skipping = 0;
-    rs->cap_candidate = 0;
-    rs->hit_cap = 0;
-    rs->cull_back_faces = bvh->cull_back_faces;
-    rs->placed = NULL;
-    rs->instance_id = HAIROBB_INVALID_ID;
-    rs->group_masked = 0;   /* ray_mask and bvh_groups are read only where it is set (hairobb__set_filters) */
-    rs->dir_length = sqrtf(hairobb__dot3(ray->dir, ray->dir));
-    if (!(rs->dir_length > 0.0f) || !(rs->dir_length < INFINITY) || !(rs->tnear <= rs->tfar)) return 0;
-    if (bvh->time_steps && !(rs->time >= 0.0f && rs->time <= 1.0f)) return 0;   /* NaN too */
-    rs->inv_dir_length = 1.0f / rs->dir_length;
-    for (k = 0; k < 3; ++k) unit[k] = ray->dir[k] * rs->inv_dir_length;
-    hairobb__frame_from_direction(unit, rs->frame);
+    rs->call.filtering = 0;
+    rs->call.bvh = bvh;
+    rs->call.ray = ray;
+    memcpy(rs->line.org, ray->org, sizeof rs->line.org);
+    memcpy(rs->line.dir, ray->dir, sizeof rs->line.dir);
+    hairobb__slab_setup(&rs->line.world, ray->org, ray->dir);
+    rs->line.tnear = ray->tnear;
+    rs->line.tfar = ray->tfar;
+    rs->line.time = ray->time;
+    rs->best.prim = HAIROBB_INVALID_ID;
+    rs->best.points = NULL;
+    rs->best.u = 0.0f;
+    rs->skip.t = 0.0f;
+    rs->skip.sheet = 0.0f;
+    rs->skip.active = 0;
+    rs->segment.cap_candidate = 0;
+    rs->best.cap = 0;
+    rs->call.cull_back_faces = bvh->cull_back_faces;
+    rs->call.placed = NULL;
+    rs->call.instance_id = HAIROBB_INVALID_ID;
+    rs->call.group_masked = 0;   /* ray_mask and bvh_groups are read only where it is set (hairobb__set_filters) */
+    rs->line.dir_length = sqrtf(hairobb__dot3(ray->dir, ray->dir));
+    if (!(rs->line.dir_length > 0.0f) || !(rs->line.dir_length < INFINITY) || !(rs->line.tnear <= rs->line.tfar)) return 0;
+    if (bvh->time_steps && !(rs->line.time >= 0.0f && rs->line.time <= 1.0f)) return 0;   /* NaN too */
+    rs->line.inv_dir_length = 1.0f / rs->line.dir_length;
+    for (k = 0; k < 3; ++k) unit[k] = ray->dir[k] * rs->line.inv_dir_length;
+    hairobb__frame_from_direction(unit, rs->line.frame);
     return 1;
 }
 
@@ -6906,20 +6936,20 @@ static int hairobb__ray_setup_from(hairobb__ray_state *rs, const hairobb_bvh *bv
         prim += bvh->group_first[from->group_id];
     }
     if (prim >= bvh->segment_count) return 1;
-    cp = hairobb__segment_points(bvh, prim, rs->time, scratch);
+    cp = hairobb__segment_points(bvh, prim, rs->line.time, scratch);
     max_r = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
     magnitude = hairobb__maxf(hairobb__maxf(fabsf(ray->org[0]), fabsf(ray->org[1])), fabsf(ray->org[2]));
-    rs->skip_t = (2.0f * max_r + magnitude * (8.0f * FLT_EPSILON)) * rs->inv_dir_length;
+    rs->skip.t = (2.0f * max_r + magnitude * (8.0f * FLT_EPSILON)) * rs->line.inv_dir_length;
     /* A tube does not turn to face the new ray. A ray that starts on it,
        its origin a rounding inside or outside, can meet the sheet it
        leaves through at once: a ray going out (along the outward normal
        `from` gives) an exit, a ray going in an entry. Only that sheet is
        skipped within the band, so a ray going in finds the fibre's far
        side. */
-    if (hairobb__is_tube(bvh, prim)) rs->skip_sheet = hairobb__dot3(ray->dir, from->Ng) > 0.0f ? -1.0f : 1.0f;
-    rs->skip_prim = prim;
-    memcpy(rs->skip_first, cp, sizeof rs->skip_first);
-    memcpy(rs->skip_last, cp + 12, sizeof rs->skip_last);
+    if (hairobb__is_tube(bvh, prim)) rs->skip.sheet = hairobb__dot3(ray->dir, from->Ng) > 0.0f ? -1.0f : 1.0f;
+    rs->skip.prim = prim;
+    memcpy(rs->skip.first, cp, sizeof rs->skip.first);
+    memcpy(rs->skip.last, cp + 12, sizeof rs->skip.last);
     return 1;
 }
 
@@ -7376,7 +7406,7 @@ HAIROBB__INLINE int hairobb__ray_point(const hairobb__ray_state *rs, float t, fl
        (each factor split into halves of 12 bits, whose products round not
        at all; no FMA, so every path rounds alike), and of org + t dir by
        Knuth's sum; round to nearest, barring overflow of 4097 t, 4097 dir */
-    hairobb__v4 org = hairobb__v4_set3(rs->org[0], rs->org[1], rs->org[2]), dir = hairobb__v4_set3(rs->dir[0], rs->dir[1], rs->dir[2]);
+    hairobb__v4 org = hairobb__v4_set3(rs->line.org[0], rs->line.org[1], rs->line.org[2]), dir = hairobb__v4_set3(rs->line.dir[0], rs->line.dir[1], rs->line.dir[2]);
     hairobb__v4 t4 = hairobb__v4_set1(t), along = hairobb__v4_mul(t4, dir), sum = hairobb__v4_add(org, along);
     float largest = hairobb__v4_hmax(hairobb__v4_add(hairobb__v4_abs(org), hairobb__v4_abs(along)));
     hairobb__v4_store(base, sum);
@@ -7418,7 +7448,7 @@ HAIROBB__INLINE void hairobb__ray_points_v4(const float origin[3], const float *
 HAIROBB__INLINE hairobb__v4 hairobb__ray_row_v4(const hairobb__ray_state *rs, int row, hairobb__v4 qx, hairobb__v4 qy,
                                                 hairobb__v4 qz)
 {
-    const float *f = rs->frame + 3 * row;
+    const float *f = rs->line.frame + 3 * row;
     return hairobb__v4_add(hairobb__v4_add(hairobb__v4_mul(hairobb__v4_set1(f[0]), qx), hairobb__v4_mul(hairobb__v4_set1(f[1]), qy)),
                            hairobb__v4_mul(hairobb__v4_set1(f[2]), qz));
 }
@@ -7517,7 +7547,7 @@ static void hairobb__tube_hit_at(const hairobb__ray_state *rs, const float *cp, 
 {
     float s = 1.0f - u, b[4], db[4], d2b[4], C[4], T[4], T2[4], r, dr;
     float R[3], n[3], cross[3], along, tperp2, denominator, scale;
-    const float *unit_dir = rs->frame + 6;
+    const float *unit_dir = rs->line.frame + 6;
     hairobb__v4 value, tangent, second;
     int i, k;
     b[0] = s * s * s; b[1] = 3.0f * u * s * s; b[2] = 3.0f * u * u * s; b[3] = u * u * u;
@@ -7537,7 +7567,7 @@ static void hairobb__tube_hit_at(const hairobb__ray_state *rs, const float *cp, 
     hairobb__v4_store(T2, second);
     r = hairobb__maxf(C[3], 0.0f);
     dr = T[3];
-    for (k = 0; k < 3; ++k) R[k] = rs->org[k] + t * rs->dir[k] - C[k];
+    for (k = 0; k < 3; ++k) R[k] = rs->line.org[k] + t * rs->line.dir[k] - C[k];
     memcpy(hit->tangent, T, sizeof hit->tangent);
     denominator = hairobb__dot3(T, T) - hairobb__dot3(R, T2);
     scale = denominator != 0.0f ? r * dr / denominator : 0.0f;
@@ -7573,7 +7603,7 @@ static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs
                             const hairobb__ray_curve *c, float u, float t, int cap, hairobb_hit *hit)
 {
     float scratch[16];
-    const float *cp = points ? points : hairobb__segment_points(bvh, prim, rs->time, scratch);
+    const float *cp = points ? points : hairobb__segment_points(bvh, prim, rs->line.time, scratch);
     if (hairobb__is_tube(bvh, prim)) {
         hairobb__tube_hit_at(rs, cp, u, t, cap, hit);
         hit->t = t;
@@ -7584,7 +7614,7 @@ static void hairobb__hit_at(const hairobb_bvh *bvh, const hairobb__ray_state *rs
     hairobb__v4 x4 = hairobb__v4_load(c->x), y4 = hairobb__v4_load(c->y), z4 = hairobb__v4_set1(0.0f), r4 = hairobb__v4_load(c->r);
     hairobb__v4 value, d1, tangent, neg_dir, n4;
     float at[4], tangent_at[4], tangent_xy[2], x, y, r, tlen2, along, n[4];
-    const float *unit_dir = rs->frame + 6;
+    const float *unit_dir = rs->line.frame + 6;
     hairobb__bezier_v4(hairobb__v4_load(cp), hairobb__v4_load(cp + 4), hairobb__v4_load(cp + 8), hairobb__v4_load(cp + 12),
                        u, &value, &tangent);
     hairobb__v4_store(tangent_at, tangent);
@@ -7637,17 +7667,17 @@ static int hairobb__shares_end(const hairobb_bvh *bvh, uint32_t prim, int end, f
 static int hairobb__ignored_before(const hairobb__ray_state *rs, uint32_t prim, float u, float t, int exit, const float *cp)
 {
     const float near_end = 1.0f / 1024.0f;
-    float close = hairobb__maxf(cp[3], cp[15]) * (1.0f / 64.0f) * rs->inv_dir_length + fabsf(t) * (1.0f / 65536.0f);
+    float close = hairobb__maxf(cp[3], cp[15]) * (1.0f / 64.0f) * rs->line.inv_dir_length + fabsf(t) * (1.0f / 65536.0f);
     int end = u <= near_end ? 0 : u >= 1.0f - near_end ? 1 : -1, list, i;
     for (list = 0; list < 2; ++list) {
-        int kept = rs->ignored_count[list] < HAIROBB__SHOWN ? rs->ignored_count[list] : HAIROBB__SHOWN;
+        int kept = rs->shown.count[list] < HAIROBB__SHOWN ? rs->shown.count[list] : HAIROBB__SHOWN;
         for (i = 0; i < kept; ++i) {
-            uint32_t other = rs->ignored_prim[list][i];
-            float other_u = rs->ignored_u[list][i];
-            if (!(fabsf(rs->ignored_t[list][i] - t) <= close) || rs->ignored_exit[list][i] != exit) continue;
+            uint32_t other = rs->shown.prim[list][i];
+            float other_u = rs->shown.u[list][i];
+            if (!(fabsf(rs->shown.t[list][i] - t) <= close) || rs->shown.exit[list][i] != exit) continue;
             if (other == prim && fabsf(other_u - u) <= near_end) return 1;
-            if (end == 1 && other == prim + 1 && other_u <= near_end && hairobb__shares_end(rs->bvh, prim, 1, rs->time, cp)) return 1;
-            if (end == 0 && other + 1 == prim && other_u >= 1.0f - near_end && hairobb__shares_end(rs->bvh, prim, 0, rs->time, cp))
+            if (end == 1 && other == prim + 1 && other_u <= near_end && hairobb__shares_end(rs->call.bvh, prim, 1, rs->line.time, cp)) return 1;
+            if (end == 0 && other + 1 == prim && other_u >= 1.0f - near_end && hairobb__shares_end(rs->call.bvh, prim, 0, rs->line.time, cp))
                 return 1;
         }
     }
@@ -7663,51 +7693,53 @@ HAIROBB__COLD static int hairobb__hit_filtered_out(hairobb__ray_state *rs, uint3
     hairobb__ray_curve c;
     hairobb__v4 qx, qy, qz, r;
     float scratch[16];
-    const float *cp = hairobb__segment_points(rs->bvh, prim, rs->time, scratch);
+    const float *cp = hairobb__segment_points(rs->call.bvh, prim, rs->line.time, scratch);
     int slot, list, exit;
-    hairobb__ray_points_v4(rs->org, cp, &qx, &qy, &qz, &r);
+    hairobb__ray_points_v4(rs->line.org, cp, &qx, &qy, &qz, &r);
     hairobb__v4_store(c.x, hairobb__ray_row_v4(rs, 0, qx, qy, qz));
     hairobb__v4_store(c.y, hairobb__ray_row_v4(rs, 1, qx, qy, qz));
     hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));
     hairobb__v4_store(c.r, r);
     /* the hit first: a tube's side is its normal's (a ribbon's faces the ray) */
-    hairobb__hit_at(rs->bvh, rs, prim, NULL, &c, u, t, rs->cap_candidate, &hit);
-    exit = hairobb__is_tube(rs->bvh, prim) && hairobb__dot3(hit.Ng, rs->dir) > 0.0f;
+    hairobb__hit_at(rs->call.bvh, rs, prim, NULL, &c, u, t, rs->segment.cap_candidate, &hit);
+    exit = hairobb__is_tube(rs->call.bvh, prim) && hairobb__dot3(hit.Ng, rs->line.dir) > 0.0f;
     if (hairobb__ignored_before(rs, prim, u, t, exit, cp)) return 1;
-    if (rs->placed) hairobb__hit_to_world(rs->placed, rs->instance_id, &hit);
-    if ((!rs->hit_filter || rs->hit_filter(rs->hit_filter_user, rs->ray, &hit)) &&
-        (!rs->call_filter || rs->call_filter(rs->call_filter_user, rs->ray, &hit)))
+    if (rs->call.placed) hairobb__hit_to_world(rs->call.placed, rs->call.instance_id, &hit);
+    if ((!rs->call.hit_filter || rs->call.hit_filter(rs->call.hit_filter_user, rs->call.ray, &hit)) &&
+        (!rs->call.call_filter || rs->call.call_filter(rs->call.call_filter_user, rs->call.ray, &hit)))
         return 0;
     for (list = 0; list < 2; ++list) {
         if (list == 1 && u > 1.0f / 1024.0f && u < 1.0f - 1.0f / 1024.0f) break;
-        slot = rs->ignored_count[list]++ % HAIROBB__SHOWN;
-        rs->ignored_prim[list][slot] = prim;
-        rs->ignored_u[list][slot] = u;
-        rs->ignored_t[list][slot] = t;
-        rs->ignored_exit[list][slot] = exit;
+        slot = rs->shown.count[list]++ % HAIROBB__SHOWN;
+        rs->shown.prim[list][slot] = prim;
+        rs->shown.u[list][slot] = u;
+        rs->shown.t[list][slot] = t;
+        rs->shown.exit[list][slot] = exit;
     }
     return 1;
 }
 
-/* Records the hit if the ribbon point (x, y) covers the ray axis within
-   radius r and t is in [tnear, tfar]: the nearest hit so far. Of two
-   segments hit at the same t the smaller index wins, whatever the tree. */
-static int hairobb__accept(hairobb__ray_state *rs, uint32_t prim, float u, float t, float x, float y, float r)
+/* Records the hit at u, t on segment prim if t is in [tnear, tfar]: the
+   nearest hit so far. Of two segments hit at the same t the smaller index
+   wins, whatever the tree. */
+static int hairobb__accept(hairobb__ray_state *rs, uint32_t prim, float u, float t)
 {
-    if (!(x * x + y * y <= r * r) || !(t >= rs->tnear) || !(t <= rs->tfar)) return 0;
-    if (t == rs->tfar && prim > rs->hit_prim) return 0;
+    if (!(t >= rs->line.tnear) || !(t <= rs->line.tfar)) return 0;
+    if (t == rs->line.tfar && prim > rs->best.prim) return 0;
     /* a group the ray's mask excludes: its hits are not taken (tested here,
        where hits are few, a ray whose mask excludes no group pays nothing
        per segment) */
-    if (rs->group_masked && !(rs->bvh_groups->group_mask[hairobb__group_of(rs->bvh_groups, prim)] & rs->ray_mask)) return 0;
-    if (rs->filtering) {
+    if (rs->call.group_masked &&
+        !(rs->call.bvh_groups->group_mask[hairobb__group_of(rs->call.bvh_groups, prim)] & rs->call.ray_mask))
+        return 0;
+    if (rs->call.filtering) {
         /* occluded1 takes one hit: the filter is shown none after it */
-        if (rs->any_hit && rs->hit_prim != HAIROBB_INVALID_ID) return 0;
+        if (rs->call.any_hit && rs->best.prim != HAIROBB_INVALID_ID) return 0;
         if (hairobb__hit_filtered_out(rs, prim, u, t)) return 0;
     }
-    rs->tfar = t;
-    rs->hit_prim = prim;
-    rs->hit_u = u;
+    rs->line.tfar = t;
+    rs->best.prim = prim;
+    rs->best.u = u;
     return 1;
 }
 
@@ -7742,13 +7774,13 @@ static float hairobb__ribbon_f(const hairobb__ray_poly *c, float u, float *deriv
    finds that hit again, and the order of the tree does not matter. */
 static float hairobb__polished_t(const hairobb__ray_state *rs, float *u, float t)
 {
-    const float *cp = rs->segment_points, *unit_dir = rs->frame + 6;
+    const float *cp = rs->segment.points, *unit_dir = rs->line.frame + 6;
     float reach = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
     float base[4], error[4], p[4], d[4], z, z1, f, f1, step, u_polished = *u, polished;
     hairobb__v4 shift, correction, p0, p1, p2, p3, value, tangent;
     /* where t's rounding (tens of ulps of the distance) could reach 1e-4 r:
        most camera rays, few secondary rays */
-    if (!(fabsf(t) * rs->dir_length * (64.0f * FLT_EPSILON) > 1e-4f * reach)) return t;
+    if (!(fabsf(t) * rs->line.dir_length * (64.0f * FLT_EPSILON) > 1e-4f * reach)) return t;
     if (!hairobb__ray_point(rs, t, reach, base, error)) return t;
     shift = hairobb__v4_set3(base[0], base[1], base[2]);
     correction = hairobb__v4_set3(error[0], error[1], error[2]);
@@ -7774,7 +7806,7 @@ static float hairobb__polished_t(const hairobb__ray_state *rs, float *u, float t
             z -= z1 * step;   /* the second-order term, z'' step^2 / 2, is far below t's rounding */
         }
     }
-    polished = t + z * rs->inv_dir_length;
+    polished = t + z * rs->line.inv_dir_length;
     /* within 2^-17 of t (the rounding it corrects is tens of ulps): the
        segment cull's slack (HAIROBB__Z_SLACK, 2^-16) still covers it */
     if (!(fabsf(polished - t) <= fabsf(t) * (1.0f / 131072.0f))) return t;
@@ -7788,8 +7820,8 @@ static int hairobb__try_hit(hairobb__ray_state *rs, const hairobb__ray_poly *c, 
     hairobb__v4_store(at, hairobb__horner(c, hairobb__v4_set1(u), NULL, NULL));
     r = hairobb__maxf(at[3], 0.0f);
     if (!(at[0] * at[0] + at[1] * at[1] <= r * r)) return 0;   /* hairobb__accept's test, before the polish */
-    t = hairobb__polished_t(rs, &u, at[2] * rs->inv_dir_length);
-    return hairobb__accept(rs, prim, u, t, 0.0f, 0.0f, 0.0f);
+    t = hairobb__polished_t(rs, &u, at[2] * rs->line.inv_dir_length);
+    return hairobb__accept(rs, prim, u, t);
 }
 
 /* Root of f in [lo, hi] where f changes sign: Newton steps, bisection when a
@@ -7882,7 +7914,7 @@ static int hairobb__try_end(const hairobb_bvh *bvh, hairobb__ray_state *rs, cons
                                    hairobb__maxf(hairobb__maxf(fabsf(c->x[next]), fabsf(c->y[next])), fabsf(c->z[next])));
     float slack = distance * (16.0f * FLT_EPSILON), at_tip = slack * (fabsf(x) + fabsf(y));
     if (!(fabsf(f) <= at_tip) &&
-        !(fabsf(f) <= at_tip + slack * (fabsf(dx) + fabsf(dy)) && hairobb__joint_at(bvh, prim, end, rs->time)))
+        !(fabsf(f) <= at_tip + slack * (fabsf(dx) + fabsf(dy)) && hairobb__joint_at(bvh, prim, end, rs->line.time)))
         return 0;
     return hairobb__try_hit(rs, poly, prim, (float)end);
 }
@@ -7959,8 +7991,9 @@ static int hairobb__piece_hit(hairobb__ray_state *rs, const hairobb__ray_curve *
     float ya = hairobb__bezier(c->y, a, NULL, NULL), yb = hairobb__bezier(c->y, b, NULL, NULL);
     float za = hairobb__bezier(c->z, a, NULL, NULL), zb = hairobb__bezier(c->z, b, NULL, NULL);
     float ra = hairobb__bezier(c->r, a, NULL, NULL), rb = hairobb__bezier(c->r, b, NULL, NULL);
-    return hairobb__accept(rs, prim, a + s * (b - a), (za + s * (zb - za)) * rs->inv_dir_length,
-                           xa + s * (xb - xa), ya + s * (yb - ya), ra + s * (rb - ra));
+    float x = xa + s * (xb - xa), y = ya + s * (yb - ya), r = ra + s * (rb - ra);
+    if (!(x * x + y * y <= r * r)) return 0;   /* the piece's point covers the ray axis */
+    return hairobb__accept(rs, prim, a + s * (b - a), (za + s * (zb - za)) * rs->line.inv_dir_length);
 }
 
 /* The pieces stage of one segment that survived the cull, c in ray space. */
@@ -8320,7 +8353,7 @@ static int hairobb__tube_root_unreachable(const hairobb__ray_state *rs, float u0
     float slack = (fabsf(z0) + fabsf(z1) + reach[0] + reach[1]) * (1.0f / 16384.0f);
     float nearest = middle - spread - slack - (sheet > 0.0f ? reach[1] : 0.0f);
     float farthest = middle + spread + slack + (sheet < 0.0f ? reach[1] : 0.0f);
-    return rs->tube_t_base + nearest * rs->inv_dir_length > rs->tfar || rs->tube_t_base + farthest * rs->inv_dir_length < rs->tnear;
+    return rs->segment.tube_t_base + nearest * rs->line.inv_dir_length > rs->line.tfar || rs->segment.tube_t_base + farthest * rs->line.inv_dir_length < rs->line.tnear;
 }
 
 /* Records a sheet's hit at u if the ray passes within r of the centre there. */
@@ -8335,8 +8368,8 @@ static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__ray_poly *p,
     /* a root just inside an interval's end can round to q > 0: q within
        its rounding counts as inside (S = 0 there) */
     if (!(at[4] <= at[7] * (8.0f * FLT_EPSILON)) || !(at[6] > min_tangent2)) return 0;
-    t = rs->tube_t_base + (at[2] - sheet * at[3]) * rs->inv_dir_length;
-    if (rs->cull_back_faces || (rs->skipping && t < rs->skip_t)) {
+    t = rs->segment.tube_t_base + (at[2] - sheet * at[3]) * rs->line.inv_dir_length;
+    if (rs->call.cull_back_faces || (rs->skip.active && t < rs->skip.t)) {
         /* whether the root faces the ray (an entry, +1) or away (-1), by
            the normal's component along it (ray space: R = (-x, -y, -sheet
            S), n = R - k c', k = r r' / (|c'|^2 - R.c''), as
@@ -8352,11 +8385,11 @@ static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__ray_poly *p,
         denominator = at[6] + v[0] * dd[0] + v[1] * dd[1] + sheet * at[3] * dd[2];
         k = denominator != 0.0f ? hairobb__maxf(v[3], 0.0f) * d[3] / denominator : 0.0f;
         facing = -sheet * at[3] - k * d[2] > 0.0f ? -1.0f : 1.0f;
-        if (facing < 0.0f && rs->cull_back_faces) return 0;
-        if (rs->skipping && t < rs->skip_t && facing == rs->skip_sheet) return 0;
+        if (facing < 0.0f && rs->call.cull_back_faces) return 0;
+        if (rs->skip.active && t < rs->skip.t && facing == rs->skip.sheet) return 0;
     }
-    if (!hairobb__accept(rs, prim, u, t, 0.0f, 0.0f, 0.0f)) return 0;
-    rs->hit_cap = 0;
+    if (!hairobb__accept(rs, prim, u, t)) return 0;
+    rs->best.cap = 0;
     return 1;
 }
 
@@ -8376,14 +8409,14 @@ static int hairobb__tube_cap(const hairobb_bvh *bvh, hairobb__ray_state *rs, con
     offset = at[0] / along;
     if (!(at[4] + offset * offset <= 0.0f)) return 0;
     sheet = (along > 0.0f) == (end == 0) ? 1.0f : -1.0f;
-    if (sheet < 0.0f && rs->cull_back_faces) return 0;
-    t = rs->tube_t_base + (at[2] + offset) * rs->inv_dir_length;
-    if (rs->skipping && sheet == rs->skip_sheet && t < rs->skip_t) return 0;
-    if (!(t >= rs->tnear) || !(t <= rs->tfar) || hairobb__joint_at(bvh, prim, end, rs->time)) return 0;
-    rs->cap_candidate = 1;
-    taken = hairobb__accept(rs, prim, (float)end, t, 0.0f, 0.0f, 0.0f);
-    rs->cap_candidate = 0;
-    if (taken) rs->hit_cap = 1;
+    if (sheet < 0.0f && rs->call.cull_back_faces) return 0;
+    t = rs->segment.tube_t_base + (at[2] + offset) * rs->line.inv_dir_length;
+    if (rs->skip.active && sheet == rs->skip.sheet && t < rs->skip.t) return 0;
+    if (!(t >= rs->line.tnear) || !(t <= rs->line.tfar) || hairobb__joint_at(bvh, prim, end, rs->line.time)) return 0;
+    rs->segment.cap_candidate = 1;
+    taken = hairobb__accept(rs, prim, (float)end, t);
+    rs->segment.cap_candidate = 0;
+    if (taken) rs->best.cap = 1;
     return taken;
 }
 
@@ -8401,7 +8434,7 @@ static int hairobb__tube_joint(hairobb__ray_state *rs, const hairobb__ray_poly *
     for (sheet = 1.0f; sheet >= -1.0f; sheet -= 2.0f) {
         float g = hairobb__tube_g(at, sheet);
         if (g == 0.0f || !(fabsf(g) <= slack)) continue;   /* exact zeros are hairobb__tube_inside's */
-        if (joint < 0) joint = hairobb__joint_at(rs->bvh, prim, end, rs->time);
+        if (joint < 0) joint = hairobb__joint_at(rs->call.bvh, prim, end, rs->line.time);
         if (joint) found |= hairobb__tube_hit(rs, p, prim, (float)end, sheet, min_tangent2);
     }
     return found;
@@ -8688,7 +8721,7 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
     float max_r, magnitude;
     int inside, tube;
     HAIROBB__COUNT(segment);
-    hairobb__ray_points_v4(rs->org, cp, &qx, &qy, &qz, &r);
+    hairobb__ray_points_v4(rs->line.org, cp, &qx, &qy, &qz, &r);
     x = hairobb__ray_row_v4(rs, 0, qx, qy, qz);
     y = hairobb__ray_row_v4(rs, 1, qx, qy, qz);
     max_r = hairobb__v4_hmax(r);
@@ -8719,7 +8752,7 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
     {
         float nx = c.y[0] - c.y[3], ny = c.x[3] - c.x[0], limit;
         float slack = hairobb__v4_hmax(hairobb__v4_abs(z)) * HAIROBB__Z_SLACK;
-        float z_near = rs->tnear * rs->dir_length, z_far = rs->tfar * rs->dir_length;
+        float z_near = rs->line.tnear * rs->line.dir_length, z_far = rs->line.tfar * rs->line.dir_length;
         hairobb__v4 d;
         if (tube) slack += max_r;   /* a tube's sheets lie within r of its centre line's depth */
         z_near -= fabsf(z_near) * (8.0f * FLT_EPSILON) + slack;
@@ -8745,27 +8778,27 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
            kept exactly (hairobb__ray_point), is taken
            off the differences of the nearby points. */
         float base[4], error[4];
-        rs->tube_t_base = 0.5f * (c.z[0] + c.z[3]) * rs->inv_dir_length;
-        if (hairobb__ray_point(rs, rs->tube_t_base, 0.0f, base, error)) {   /* reach 0: always exact, so joints meet */
+        rs->segment.tube_t_base = 0.5f * (c.z[0] + c.z[3]) * rs->line.inv_dir_length;
+        if (hairobb__ray_point(rs, rs->segment.tube_t_base, 0.0f, base, error)) {   /* reach 0: always exact, so joints meet */
             hairobb__ray_points_v4(base, cp, &qx, &qy, &qz, &r);
             qx = hairobb__v4_sub(qx, hairobb__v4_set1(error[0]));
             qy = hairobb__v4_sub(qy, hairobb__v4_set1(error[1]));
             qz = hairobb__v4_sub(qz, hairobb__v4_set1(error[2]));
         } else {   /* the split overflowed (|dir| near FLT_MAX): as tested above */
-            rs->tube_t_base = 0.0f;
+            rs->segment.tube_t_base = 0.0f;
         }
         hairobb__v4_store(c.x, hairobb__ray_row_v4(rs, 0, qx, qy, qz));
         hairobb__v4_store(c.y, hairobb__ray_row_v4(rs, 1, qx, qy, qz));
         hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));
         if (!hairobb__intersect_tube(bvh, rs, &c, cp, prim, any_hit)) return 0;
     } else {
-        rs->segment_points = cp;
+        rs->segment.points = cp;
         if (!hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit)) return 0;
     }
     if (!any_hit) {   /* the nearest hit so far is on this segment */
-        rs->hit_curve = c;
+        rs->best.curve = c;
         /* kept for the hit's attributes: no lookup by prim, which misses at scale */
-        rs->hit_points = bvh->leaf_points || bvh->points_in_place ? cp : NULL;
+        rs->best.points = bvh->leaf_points || bvh->points_in_place ? cp : NULL;
     }
     return 1;
 }
@@ -8774,10 +8807,10 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
    own group). */
 static int hairobb__skipped(const hairobb_bvh *bvh, const hairobb__ray_state *rs, uint32_t prim, const float *cp)
 {
-    return prim == rs->skip_prim ||
-           (((cp[0] == rs->skip_last[0] && cp[1] == rs->skip_last[1] && cp[2] == rs->skip_last[2]) ||
-             (cp[12] == rs->skip_first[0] && cp[13] == rs->skip_first[1] && cp[14] == rs->skip_first[2])) &&
-            hairobb__group_of(bvh, prim) == hairobb__group_of(bvh, rs->skip_prim));
+    return prim == rs->skip.prim ||
+           (((cp[0] == rs->skip.last[0] && cp[1] == rs->skip.last[1] && cp[2] == rs->skip.last[2]) ||
+             (cp[12] == rs->skip.first[0] && cp[13] == rs->skip.first[1] && cp[14] == rs->skip.first[2])) &&
+            hairobb__group_of(bvh, prim) == hairobb__group_of(bvh, rs->skip.prim));
 }
 
 static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint64_t ref, int any_hit)
@@ -8794,19 +8827,19 @@ static int hairobb__intersect_leaf(const hairobb_bvh *bvh, hairobb__ray_state *r
         /* no load waits for prim: the copy holds the leaf's points on its
            own lines, or leaf_offsets says where the caller's are */
         const float *cp = copy ? copy + 16 * i
-                               : hairobb__points_at(bvh, 4 * (size_t)bvh->leaf_offsets[first + i], rs->time, scratch);
+                               : hairobb__points_at(bvh, 4 * (size_t)bvh->leaf_offsets[first + i], rs->line.time, scratch);
         if (HAIROBB__LEAF_VISIT(rs, prim)) continue;
-        if (rs->skip_t > 0.0f && hairobb__skipped(bvh, rs, prim, cp)) {
-            if (rs->skip_sheet != 0.0f) {
-                rs->skipping = 1;   /* a tube: one sheet, near the origin (hairobb__tube_hit) */
+        if (rs->skip.t > 0.0f && hairobb__skipped(bvh, rs, prim, cp)) {
+            if (rs->skip.sheet != 0.0f) {
+                rs->skip.active = 1;   /* a tube: one sheet, near the origin (hairobb__tube_hit) */
                 hit = hairobb__intersect_segment(bvh, rs, prim, cp, any_hit);
-                rs->skipping = 0;
+                rs->skip.active = 0;
             } else {
                 /* a ribbon: this segment alone is tested from skip_t on */
-                float tnear = rs->tnear;
-                rs->tnear = hairobb__maxf(tnear, rs->skip_t);
-                hit = rs->tnear <= rs->tfar && hairobb__intersect_segment(bvh, rs, prim, cp, any_hit);
-                rs->tnear = tnear;
+                float tnear = rs->line.tnear;
+                rs->line.tnear = hairobb__maxf(tnear, rs->skip.t);
+                hit = rs->line.tnear <= rs->line.tfar && hairobb__intersect_segment(bvh, rs, prim, cp, any_hit);
+                rs->line.tnear = tnear;
             }
         } else {
             hit = hairobb__intersect_segment(bvh, rs, prim, cp, any_hit);
@@ -8832,7 +8865,7 @@ HAIROBB__INLINE hairobb__vn hairobb__far_scale(hairobb__vn tfar)
 HAIROBB__INLINE int hairobb__intersect_boxes(const float *planes, const hairobb__slab_ray *slab,
                                              const hairobb__ray_state *rs, float dist[HAIROBB__W])
 {
-    hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
+    hairobb__vn tn = hairobb__vn_set1(rs->line.tnear), tf = hairobb__vn_set1(rs->line.tfar);
 #define HAIROBB__SLAB_AXIS(k) do { \
         hairobb__vn o = hairobb__vn_set1(slab->org[k]), r = hairobb__vn_set1(slab->rdir[k]); \
         tn = hairobb__vn_max(hairobb__vn_mul(hairobb__vn_sub(hairobb__vn_load(planes + slab->near_plane[k]), o), r), tn); \
@@ -8852,10 +8885,10 @@ static int hairobb__intersect_rotated_node(const hairobb__rotated_node *node, co
     hairobb__slab_ray slab;
     float org[3], dir[3], moved[3];
     int k;
-    for (k = 0; k < 3; ++k) moved[k] = rs->org[k] - node->centre[k];
+    for (k = 0; k < 3; ++k) moved[k] = rs->line.org[k] - node->centre[k];
     for (k = 0; k < 3; ++k) {
         org[k] = hairobb__dot3(node->rotation + 3 * k, moved);
-        dir[k] = hairobb__dot3(node->rotation + 3 * k, rs->dir);
+        dir[k] = hairobb__dot3(node->rotation + 3 * k, rs->line.dir);
     }
     hairobb__slab_setup(&slab, org, dir);
     return hairobb__intersect_boxes(node->lower[0], &slab, rs, dist);
@@ -8870,21 +8903,21 @@ HAIROBB__INLINE int hairobb__intersect_compressed_node(const hairobb__compressed
                                                        float dist[HAIROBB__W])
 {
     hairobb__slab_ray slab;
-    hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar), tau = hairobb__vn_set1(rs->time);
+    hairobb__vn tn = hairobb__vn_set1(rs->line.tnear), tf = hairobb__vn_set1(rs->line.tfar), tau = hairobb__vn_set1(rs->line.time);
     const signed char *planes = node->lower[0];
     float moved[3];
     int k;
-    for (k = 0; k < 3; ++k) moved[k] = rs->org[k] - node->centre[k];
+    for (k = 0; k < 3; ++k) moved[k] = rs->line.org[k] - node->centre[k];
     if (rotated) {
         float frame[9], org[3], dir[3];
         hairobb__decode_rotation(node->rotation, frame);
         for (k = 0; k < 3; ++k) {
             org[k] = hairobb__dot3(frame + 3 * k, moved);
-            dir[k] = hairobb__dot3(frame + 3 * k, rs->dir);
+            dir[k] = hairobb__dot3(frame + 3 * k, rs->line.dir);
         }
         hairobb__slab_setup(&slab, org, dir);
     } else {
-        slab = rs->world;
+        slab = rs->line.world;
         memcpy(slab.org, moved, sizeof moved);
     }
     for (k = 0; k < 3; ++k) {
@@ -8915,10 +8948,10 @@ HAIROBB__INLINE int hairobb__intersect_compressed_obb_node(const hairobb__compre
                                                            const signed char *end_planes, const hairobb__ray_state *rs,
                                                            float dist[HAIROBB__W])
 {
-    hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar), tau = hairobb__vn_set1(rs->time);
-    hairobb__vn ox = hairobb__vn_set1(rs->org[0] - node->centre[0]), oy = hairobb__vn_set1(rs->org[1] - node->centre[1]);
-    hairobb__vn oz = hairobb__vn_set1(rs->org[2] - node->centre[2]);
-    hairobb__vn dx = hairobb__vn_set1(rs->dir[0]), dy = hairobb__vn_set1(rs->dir[1]), dz = hairobb__vn_set1(rs->dir[2]);
+    hairobb__vn tn = hairobb__vn_set1(rs->line.tnear), tf = hairobb__vn_set1(rs->line.tfar), tau = hairobb__vn_set1(rs->line.time);
+    hairobb__vn ox = hairobb__vn_set1(rs->line.org[0] - node->centre[0]), oy = hairobb__vn_set1(rs->line.org[1] - node->centre[1]);
+    hairobb__vn oz = hairobb__vn_set1(rs->line.org[2] - node->centre[2]);
+    hairobb__vn dx = hairobb__vn_set1(rs->line.dir[0]), dy = hairobb__vn_set1(rs->line.dir[1]), dz = hairobb__vn_set1(rs->line.dir[2]);
     hairobb__vn one = hairobb__vn_set1(1.0f);
 #define HAIROBB__QOBB_AXIS(k) do { \
         hairobb__vn m0 = hairobb__vn_from_bytes(node->rotation[3 * (k)]), m1 = hairobb__vn_from_bytes(node->rotation[3 * (k) + 1]); \
@@ -8948,11 +8981,11 @@ HAIROBB__INLINE int hairobb__intersect_compressed_obb_node(const hairobb__compre
    1/d unclamped, as in hairobb__intersect_compressed_obb_node. */
 HAIROBB__INLINE int hairobb__intersect_obb_node(const hairobb__obb_node *node, const hairobb__ray_state *rs, float dist[HAIROBB__W])
 {
-    hairobb__vn tn = hairobb__vn_set1(rs->tnear), tf = hairobb__vn_set1(rs->tfar);
+    hairobb__vn tn = hairobb__vn_set1(rs->line.tnear), tf = hairobb__vn_set1(rs->line.tfar);
     hairobb__vn one = hairobb__vn_set1(1.0f), zero = hairobb__vn_set1(0.0f);
-    hairobb__vn ox = hairobb__vn_set1(rs->org[0] - node->centre[0]), oy = hairobb__vn_set1(rs->org[1] - node->centre[1]);
-    hairobb__vn oz = hairobb__vn_set1(rs->org[2] - node->centre[2]);
-    hairobb__vn dx = hairobb__vn_set1(rs->dir[0]), dy = hairobb__vn_set1(rs->dir[1]), dz = hairobb__vn_set1(rs->dir[2]);
+    hairobb__vn ox = hairobb__vn_set1(rs->line.org[0] - node->centre[0]), oy = hairobb__vn_set1(rs->line.org[1] - node->centre[1]);
+    hairobb__vn oz = hairobb__vn_set1(rs->line.org[2] - node->centre[2]);
+    hairobb__vn dx = hairobb__vn_set1(rs->line.dir[0]), dy = hairobb__vn_set1(rs->line.dir[1]), dz = hairobb__vn_set1(rs->line.dir[2]);
 #define HAIROBB__OBB_ROW(row) do { \
         hairobb__vn m0 = hairobb__vn_load(node->xfm[3 * (row)]), m1 = hairobb__vn_load(node->xfm[3 * (row) + 1]); \
         hairobb__vn m2 = hairobb__vn_load(node->xfm[3 * (row) + 2]), m3 = hairobb__vn_load(node->xfm[9 + (row)]); \
@@ -9031,7 +9064,7 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
     float stack_dist[HAIROBB__STACK];
     int sp = 0, found = 0;
     uint64_t ref = bvh->root;
-    rs->any_hit = any_hit;
+    rs->call.any_hit = any_hit;
     for (;;) {
         /* the default layout's types and leaves first, a compare each; the rest out of line */
         unsigned type = HAIROBB__REF_TYPE(ref);
@@ -9053,7 +9086,7 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
             child = NULL;
         } else if (type == HAIROBB__REF_AABB) {
             const hairobb__aabb_node *aabb = HAIROBB__CAST(const hairobb__aabb_node *, (const void *)HAIROBB__NODE_AT(bvh->nodes, ref));
-            bits = hairobb__intersect_boxes(aabb->lower[0], &rs->world, rs, dist);
+            bits = hairobb__intersect_boxes(aabb->lower[0], &rs->line.world, rs, dist);
             child = aabb->child;
         } else {
             bits = hairobb__intersect_other_node(bvh, rs, ref, dist, &child);
@@ -9127,7 +9160,7 @@ static int hairobb__traverse(const hairobb_bvh *bvh, hairobb__ray_state *rs, int
         do {
             if (sp == 0) return found;
             --sp;
-        } while (stack_dist[sp] > rs->tfar * HAIROBB__FAR_SCALE);
+        } while (stack_dist[sp] > rs->line.tfar * HAIROBB__FAR_SCALE);
         ref = stack_ref[sp];
     }
 }
@@ -9152,18 +9185,18 @@ static int hairobb__trace(const hairobb_bvh *bvh, hairobb__ray_state *rs, int an
 /* The filters a call shows its hits: the BVH's for its kind, the call's. */
 HAIROBB__INLINE void hairobb__set_filters(hairobb__ray_state *rs, const hairobb_bvh *bvh, const hairobb_context *context, int any_hit)
 {
-    rs->hit_filter = any_hit ? bvh->occluded_filter : bvh->hit_filter;
-    rs->hit_filter_user = any_hit ? bvh->occluded_filter_user : bvh->hit_filter_user;
-    rs->call_filter = context ? context->filter : NULL;
-    rs->call_filter_user = context ? context->user : NULL;
-    rs->filtering = rs->hit_filter != NULL || rs->call_filter != NULL;
-    rs->ignored_count[0] = rs->ignored_count[1] = 0;
+    rs->call.hit_filter = any_hit ? bvh->occluded_filter : bvh->hit_filter;
+    rs->call.hit_filter_user = any_hit ? bvh->occluded_filter_user : bvh->hit_filter_user;
+    rs->call.call_filter = context ? context->filter : NULL;
+    rs->call.call_filter_user = context ? context->user : NULL;
+    rs->call.filtering = rs->call.hit_filter != NULL || rs->call.call_filter != NULL;
+    rs->shown.count[0] = rs->shown.count[1] = 0;
     if (!HAIROBB__LIKELY(bvh->group_first == NULL)) {   /* groups: does the ray's mask exclude one? */
         uint32_t g;
-        rs->ray_mask = context && context->mask ? context->mask : 0xffffffffu;
-        rs->bvh_groups = bvh;
-        if (!(rs->ray_mask & bvh->group_mask_and))
-            for (g = 0; g < bvh->group_count && !rs->group_masked; ++g) rs->group_masked = !(bvh->group_mask[g] & rs->ray_mask);
+        rs->call.ray_mask = context && context->mask ? context->mask : 0xffffffffu;
+        rs->call.bvh_groups = bvh;
+        if (!(rs->call.ray_mask & bvh->group_mask_and))
+            for (g = 0; g < bvh->group_count && !rs->call.group_masked; ++g) rs->call.group_masked = !(bvh->group_mask[g] & rs->call.ray_mask);
     }
 }
 
@@ -9180,7 +9213,7 @@ HAIROBB_DEF int hairobb_intersect1_context(const hairobb_bvh *bvh, const hairobb
     if (!ready) return 0;
     hairobb__set_filters(&rs, bvh, context, 0);
     if (!hairobb__trace(bvh, &rs, 0)) return 0;
-    hairobb__hit_at(bvh, &rs, rs.hit_prim, rs.hit_points, &rs.hit_curve, rs.hit_u, rs.tfar, rs.hit_cap, hit);
+    hairobb__hit_at(bvh, &rs, rs.best.prim, rs.best.points, &rs.best.curve, rs.best.u, rs.line.tfar, rs.best.cap, hit);
     return 1;
 }
 
@@ -9599,9 +9632,9 @@ static int hairobb__scene_trace(const hairobb_scene *scene, uint32_t id, const h
         leaving = &from_object;
     }
     if (!hairobb__ray_setup_from(rs, placed->bvh, leaving, &object)) return 0;
-    rs->ray = ray;   /* filters are shown the caller's ray, and hits in world space */
-    rs->placed = placed;
-    rs->instance_id = id;
+    rs->call.ray = ray;   /* filters are shown the caller's ray, and hits in world space */
+    rs->call.placed = placed;
+    rs->call.instance_id = id;
     hairobb__set_filters(rs, placed->bvh, context, any_hit);
     return hairobb__trace(placed->bvh, rs, any_hit);
 }
@@ -9624,10 +9657,10 @@ HAIROBB_DEF int hairobb_scene_intersect1(const hairobb_scene *scene, const hairo
     stack[0] = 0;
     while (hairobb__scene_next(&walk, stack, &sp, &id)) {
         if (!hairobb__scene_trace(scene, id, context, from ? &leaving : NULL, ray, best_t, 0, &rs)) continue;
-        if (best_id != HAIROBB_INVALID_ID && !(rs.tfar < best_t || (rs.tfar == best_t && id < best_id))) continue;
-        hairobb__hit_at(scene->placed[id].bvh, &rs, rs.hit_prim, rs.hit_points, &rs.hit_curve, rs.hit_u, rs.tfar, rs.hit_cap, &best);
+        if (best_id != HAIROBB_INVALID_ID && !(rs.line.tfar < best_t || (rs.line.tfar == best_t && id < best_id))) continue;
+        hairobb__hit_at(scene->placed[id].bvh, &rs, rs.best.prim, rs.best.points, &rs.best.curve, rs.best.u, rs.line.tfar, rs.best.cap, &best);
         hairobb__hit_to_world(&scene->placed[id], id, &best);
-        best_t = rs.tfar;
+        best_t = rs.line.tfar;
         best_id = id;
     }
     if (best_id == HAIROBB_INVALID_ID) return 0;

@@ -494,7 +494,7 @@ __attribute__((target("avx2")))
 static int segment_test(const hairobb_bvh *bvh, hairobb__ray_state *rs, uint32_t prim)
 {
     float scratch[16];
-    return hairobb__intersect_segment(bvh, rs, prim, hairobb__segment_points(bvh, prim, rs->time, scratch), 0);
+    return hairobb__intersect_segment(bvh, rs, prim, hairobb__segment_points(bvh, prim, rs->line.time, scratch), 0);
 }
 
 /* Segment prim alone hits the ray first at exactly t: two segments the ray
@@ -503,7 +503,7 @@ static int hits_at(const hairobb_bvh *bvh, const hairobb_ray *ray, uint32_t prim
 {
     hairobb__ray_state rs;
     hairobb__ray_setup(&rs, bvh, ray);
-    return prim < n && segment_test(bvh, &rs, prim) && rs.tfar == t;
+    return prim < n && segment_test(bvh, &rs, prim) && rs.line.tfar == t;
 }
 
 typedef struct unit_config {
@@ -667,7 +667,7 @@ static void test_bounds_and_traversal(void)
             int brute = 0, got = hairobb_intersect1(bvh, &ray, &hit);
             hairobb__ray_setup(&rs, bvh, &ray);
             for (p = 0; p < n; ++p) brute |= segment_test(bvh, &rs, p);
-            if (brute != got || (got && (hit.t != rs.tfar || (hit.prim_id != rs.hit_prim && !hits_at(bvh, &ray, hit.prim_id, hit.t, n)))))
+            if (brute != got || (got && (hit.t != rs.line.tfar || (hit.prim_id != rs.best.prim && !hits_at(bvh, &ray, hit.prim_id, hit.t, n)))))
                 ++mismatches;
             if (hairobb_occluded1(bvh, &ray) != got) ++occluded_mismatches;
             if (got && !(hit.t >= ray.tnear && hit.u >= 0.0f && hit.u <= 1.0f && hit.v >= -1.0f && hit.v <= 1.0f)) ++mismatches;
@@ -835,7 +835,7 @@ static void test_degenerate_trees(void)
             got = hairobb_intersect1(bvh, &ray, &hit);
             hairobb__ray_setup(&rs, bvh, &ray);
             for (p = 0; p < n; ++p) brute |= segment_test(bvh, &rs, p);
-            if (brute != got || (got && hit.t != rs.tfar) || hairobb_occluded1(bvh, &ray) != got) ++mismatches;
+            if (brute != got || (got && hit.t != rs.line.tfar) || hairobb_occluded1(bvh, &ray) != got) ++mismatches;
             hits += got;
         }
         CHECK(scene == 2 || hits > 40, "degenerate scene %d: %ld hits of 400 rays", scene, hits);
