@@ -6803,9 +6803,7 @@ typedef struct hairobb__ray_skip {
 } hairobb__ray_skip;
 
 typedef struct hairobb__ray_segment {
-    float tube_t_base;          /* tubes: t of the point of the ray the segment tested is relative to */
     const float *points;        /* ribbons: the world points of the segment tested (its roots' t polished on them) */
-    int cap_candidate;          /* tubes: set while an end cap's hit is offered (the filter's hit is the cap's) */
 } hairobb__ray_segment;
 
 typedef struct hairobb__ray_state {
@@ -6878,7 +6876,6 @@ static int hairobb__ray_setup(hairobb__ray_state *rs, const hairobb_bvh *bvh, co
     rs->skip.t = 0.0f;
     rs->skip.sheet = 0.0f;
     rs->skip.active = 0;
-    rs->segment.cap_candidate = 0;
     rs->best.cap = 0;
     rs->call.cull_back_faces = bvh->cull_back_faces;
     rs->call.placed = NULL;
@@ -7686,8 +7683,8 @@ static int hairobb__ignored_before(const hairobb__ray_state *rs, uint32_t prim, 
 
 /* Whether a filter drops the hit at u, t on segment prim (showing it the
    hit once): out of line, so that hairobb__accept stays small where no
-   filter is set. */
-HAIROBB__COLD static int hairobb__hit_filtered_out(hairobb__ray_state *rs, uint32_t prim, float u, float t)
+   filter is set. cap: the hit is on a tube's end cap. */
+HAIROBB__COLD static int hairobb__hit_filtered_out(hairobb__ray_state *rs, uint32_t prim, float u, float t, int cap)
 {
     hairobb_hit hit;
     hairobb__ray_curve c;
@@ -7701,7 +7698,7 @@ HAIROBB__COLD static int hairobb__hit_filtered_out(hairobb__ray_state *rs, uint3
     hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));
     hairobb__v4_store(c.r, r);
     /* the hit first: a tube's side is its normal's (a ribbon's faces the ray) */
-    hairobb__hit_at(rs->call.bvh, rs, prim, NULL, &c, u, t, rs->segment.cap_candidate, &hit);
+    hairobb__hit_at(rs->call.bvh, rs, prim, NULL, &c, u, t, cap, &hit);
     exit = hairobb__is_tube(rs->call.bvh, prim) && hairobb__dot3(hit.Ng, rs->line.dir) > 0.0f;
     if (hairobb__ignored_before(rs, prim, u, t, exit, cp)) return 1;
     if (rs->call.placed) hairobb__hit_to_world(rs->call.placed, rs->call.instance_id, &hit);
@@ -7719,10 +7716,11 @@ HAIROBB__COLD static int hairobb__hit_filtered_out(hairobb__ray_state *rs, uint3
     return 1;
 }
 
-/* Records the hit at u, t on segment prim if t is in [tnear, tfar]: the
-   nearest hit so far. Of two segments hit at the same t the smaller index
-   wins, whatever the tree. */
-static int hairobb__accept(hairobb__ray_state *rs, uint32_t prim, float u, float t)
+/* Records the hit at u, t on segment prim (cap: on a tube's end cap, as
+   the filters are shown it) if t is in [tnear, tfar]: the nearest hit so
+   far. Of two segments hit at the same t the smaller index wins, whatever
+   the tree. A tube's caller records whether it took a cap (best.cap). */
+HAIROBB__INLINE int hairobb__take(hairobb__ray_state *rs, uint32_t prim, float u, float t, int cap)
 {
     if (!(t >= rs->line.tnear) || !(t <= rs->line.tfar)) return 0;
     if (t == rs->line.tfar && prim > rs->best.prim) return 0;
@@ -7735,13 +7733,18 @@ static int hairobb__accept(hairobb__ray_state *rs, uint32_t prim, float u, float
     if (rs->call.filtering) {
         /* occluded1 takes one hit: the filter is shown none after it */
         if (rs->call.any_hit && rs->best.prim != HAIROBB_INVALID_ID) return 0;
-        if (hairobb__hit_filtered_out(rs, prim, u, t)) return 0;
+        if (hairobb__hit_filtered_out(rs, prim, u, t, cap)) return 0;
     }
     rs->line.tfar = t;
     rs->best.prim = prim;
     rs->best.u = u;
     return 1;
 }
+
+/* hairobb__take of a hit on a ribbon or a tube's side: a function of its
+   own, as the callers had it before caps (the compiler inlines it where
+   it pays) */
+static int hairobb__accept(hairobb__ray_state *rs, uint32_t prim, float u, float t) { return hairobb__take(rs, prim, u, t, 0); }
 
 /* ------------------------------------------------------------------------ */
 /* >>ribbon  Ribbons: the pieces, their roots, the polish                   */
@@ -8336,6 +8339,17 @@ static float hairobb__tube_root(const hairobb__ray_poly *p, float lo, float hi, 
     return u;
 }
 
+/* What a tube's functions share about the segment tested: set once by
+   hairobb__intersect_tube and passed down (nothing of it in the ray's state). */
+typedef struct hairobb__tube_segment {
+    const hairobb_bvh *bvh;
+    hairobb__ray_poly poly;     /* the segment in ray space, in power form */
+    uint32_t prim;
+    float t_base;               /* t of the point of the ray the points are relative to */
+    float min_tangent2;         /* |P'|^2 at or below it: no circle (a tangent vanishing) */
+    float reach[2];             /* bounds on |z'| and on r over the segment */
+} hairobb__tube_segment;
+
 /* Whether no root of a sheet between samples u0 and u1 (the centre line's
    depths z0, z1 there) can be accepted, so that refining it would be
    wasted (a ray's other sheet, or a segment behind its nearest hit so
@@ -8346,20 +8360,22 @@ static float hairobb__tube_root(const hairobb__ray_poly *p, float lo, float hi, 
    sheet (-1). The slack, 2^-14 of the magnitudes, covers the roundings of
    z: hairobb__tube_hit's t is the same rounded expression of a depth at
    least this bound, and rounding is monotone, so the answer is exact. */
-static int hairobb__tube_root_unreachable(const hairobb__ray_state *rs, float u0, float u1, float z0, float z1, float sheet,
-                                          const float reach[2])
+static int hairobb__tube_root_unreachable(const hairobb__ray_state *rs, const hairobb__tube_segment *seg, float u0, float u1,
+                                          float z0, float z1, float sheet)
 {
+    const float *reach = seg->reach;
     float middle = 0.5f * (z0 + z1), spread = 0.5f * reach[0] * (u1 - u0);
     float slack = (fabsf(z0) + fabsf(z1) + reach[0] + reach[1]) * (1.0f / 16384.0f);
     float nearest = middle - spread - slack - (sheet > 0.0f ? reach[1] : 0.0f);
     float farthest = middle + spread + slack + (sheet < 0.0f ? reach[1] : 0.0f);
-    return rs->segment.tube_t_base + nearest * rs->line.inv_dir_length > rs->line.tfar || rs->segment.tube_t_base + farthest * rs->line.inv_dir_length < rs->line.tnear;
+    return seg->t_base + nearest * rs->line.inv_dir_length > rs->line.tfar ||
+           seg->t_base + farthest * rs->line.inv_dir_length < rs->line.tnear;
 }
 
 /* Records a sheet's hit at u if the ray passes within r of the centre there. */
-static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__ray_poly *p, uint32_t prim, float u, float sheet,
-                             float min_tangent2)
+static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__tube_segment *seg, float u, float sheet)
 {
+    const hairobb__ray_poly *p = &seg->poly;
     float at[HAIROBB__TUBE_AT], t;
     hairobb__tube_at(p, u, at);
     /* no circle where the tangent (nearly) vanishes: at a repeated end
@@ -8367,8 +8383,8 @@ static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__ray_poly *p,
        there is float noise */
     /* a root just inside an interval's end can round to q > 0: q within
        its rounding counts as inside (S = 0 there) */
-    if (!(at[4] <= at[7] * (8.0f * FLT_EPSILON)) || !(at[6] > min_tangent2)) return 0;
-    t = rs->segment.tube_t_base + (at[2] - sheet * at[3]) * rs->line.inv_dir_length;
+    if (!(at[4] <= at[7] * (8.0f * FLT_EPSILON)) || !(at[6] > seg->min_tangent2)) return 0;
+    t = seg->t_base + (at[2] - sheet * at[3]) * rs->line.inv_dir_length;
     if (rs->call.cull_back_faces || (rs->skip.active && t < rs->skip.t)) {
         /* whether the root faces the ray (an entry, +1) or away (-1), by
            the normal's component along it (ray space: R = (-x, -y, -sheet
@@ -8388,7 +8404,7 @@ static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__ray_poly *p,
         if (facing < 0.0f && rs->call.cull_back_faces) return 0;
         if (rs->skip.active && t < rs->skip.t && facing == rs->skip.sheet) return 0;
     }
-    if (!hairobb__accept(rs, prim, u, t)) return 0;
+    if (!hairobb__accept(rs, seg->prim, u, t)) return 0;
     rs->best.cap = 0;
     return 1;
 }
@@ -8399,25 +8415,21 @@ static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__ray_poly *p,
    at depth z + w / z' (hairobb__intersect_tube's terms), at distance^2 q +
    r^2 + (w / z')^2 from the centre. A ray going along the outward normal
    (-P' at end 0, P' at end 1) leaves the fibre there: an exit (sheet -1). */
-static int hairobb__tube_cap(const hairobb_bvh *bvh, hairobb__ray_state *rs, const float at[HAIROBB__TUBE_AT], uint32_t prim, int end,
-                             float min_tangent2)
+static int hairobb__tube_cap(hairobb__ray_state *rs, const hairobb__tube_segment *seg, const float at[HAIROBB__TUBE_AT], int end)
 {
     float along = at[1], offset, t, sheet;
-    int taken;
     /* the ray in the cap's plane, or no plane (hairobb__tube_hit) */
-    if (!(along != 0.0f) || !(at[6] > min_tangent2)) return 0;
+    if (!(along != 0.0f) || !(at[6] > seg->min_tangent2)) return 0;
     offset = at[0] / along;
     if (!(at[4] + offset * offset <= 0.0f)) return 0;
     sheet = (along > 0.0f) == (end == 0) ? 1.0f : -1.0f;
     if (sheet < 0.0f && rs->call.cull_back_faces) return 0;
-    t = rs->segment.tube_t_base + (at[2] + offset) * rs->line.inv_dir_length;
+    t = seg->t_base + (at[2] + offset) * rs->line.inv_dir_length;
     if (rs->skip.active && sheet == rs->skip.sheet && t < rs->skip.t) return 0;
-    if (!(t >= rs->line.tnear) || !(t <= rs->line.tfar) || hairobb__joint_at(bvh, prim, end, rs->line.time)) return 0;
-    rs->segment.cap_candidate = 1;
-    taken = hairobb__accept(rs, prim, (float)end, t);
-    rs->segment.cap_candidate = 0;
-    if (taken) rs->best.cap = 1;
-    return taken;
+    if (!(t >= rs->line.tnear) || !(t <= rs->line.tfar) || hairobb__joint_at(seg->bvh, seg->prim, end, rs->line.time)) return 0;
+    if (!hairobb__take(rs, seg->prim, (float)end, t, 1)) return 0;
+    rs->best.cap = 1;
+    return 1;
 }
 
 /* At a strand's smooth joint (hairobb__joint_at) a sheet's root within
@@ -8426,29 +8438,27 @@ static int hairobb__tube_cap(const hairobb_bvh *bvh, hairobb__ray_state *rs, con
    end itself is a root where g there is within its rounding (w and z' S
    off by tens of ulps of the point's depth and distance times |P'|). at:
    hairobb__tube_at at u = end. */
-static int hairobb__tube_joint(hairobb__ray_state *rs, const hairobb__ray_poly *p, uint32_t prim, const float at[HAIROBB__TUBE_AT],
-                               int end, float min_tangent2)
+static int hairobb__tube_joint(hairobb__ray_state *rs, const hairobb__tube_segment *seg, const float at[HAIROBB__TUBE_AT], int end)
 {
     float slack = (fabsf(at[2]) + sqrtf(at[7])) * sqrtf(at[6]) * (64.0f * FLT_EPSILON), sheet;
     int found = 0, joint = -1;
     for (sheet = 1.0f; sheet >= -1.0f; sheet -= 2.0f) {
         float g = hairobb__tube_g(at, sheet);
         if (g == 0.0f || !(fabsf(g) <= slack)) continue;   /* exact zeros are hairobb__tube_inside's */
-        if (joint < 0) joint = hairobb__joint_at(rs->call.bvh, prim, end, rs->line.time);
-        if (joint) found |= hairobb__tube_hit(rs, p, prim, (float)end, sheet, min_tangent2);
+        if (joint < 0) joint = hairobb__joint_at(seg->bvh, seg->prim, end, rs->line.time);
+        if (joint) found |= hairobb__tube_hit(rs, seg, (float)end, sheet);
     }
     return found;
 }
 
 /* The exit sheet's roots held back by hairobb__tube_inside, in u order. */
-static int hairobb__tube_exits(hairobb__ray_state *rs, const hairobb__ray_poly *p, uint32_t prim, float exits[8][6], int *count,
-                               float min_tangent2, const float reach[2])
+static int hairobb__tube_exits(hairobb__ray_state *rs, const hairobb__tube_segment *seg, float exits[8][6], int *count)
 {
     int k, found = 0;
     for (k = 0; k < *count; ++k) {
         const float *e = exits[k];
-        if (!hairobb__tube_root_unreachable(rs, e[0], e[1], e[4], e[5], -1.0f, reach))
-            found |= hairobb__tube_hit(rs, p, prim, hairobb__tube_root(p, e[0], e[1], e[2], e[3], -1.0f), -1.0f, min_tangent2);
+        if (!hairobb__tube_root_unreachable(rs, seg, e[0], e[1], e[4], e[5], -1.0f))
+            found |= hairobb__tube_hit(rs, seg, hairobb__tube_root(&seg->poly, e[0], e[1], e[2], e[3], -1.0f), -1.0f);
     }
     *count = 0;
     return found;
@@ -8456,9 +8466,9 @@ static int hairobb__tube_exits(hairobb__ray_state *rs, const hairobb__ray_poly *
 
 /* Both sheets' roots in the inside interval [a, b]: g of both sheets at
    the samples, 8 at a time (hairobb__tube_g_v8), each sign change refined. */
-static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__ray_poly *p, uint32_t prim, float a, float b,
-                                float min_tangent2, const float reach[2], int any_hit)
+static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__tube_segment *seg, float a, float b, int any_hit)
 {
+    const hairobb__ray_poly *p = &seg->poly;
     float ends[HAIROBB__TUBE_AT], u_lanes[8], g_lanes[2][8], z_lanes[8], g_previous[2], u_previous = a, z_previous = 0.0f;
     /* the exit sheet's sign changes, refined after the entry sheet's (a
        nearest hit) unless hairobb__tube_root_unreachable then rules them
@@ -8471,7 +8481,7 @@ static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__ray_poly 
     if (samples < HAIROBB__TUBE_INSIDE_SAMPLES) samples = HAIROBB__TUBE_INSIDE_SAMPLES;
     if (a == 0.0f) {
         hairobb__tube_at(p, a, ends);
-        found |= hairobb__tube_joint(rs, p, prim, ends, 0, min_tangent2);
+        found |= hairobb__tube_joint(rs, seg, ends, 0);
         if (found && any_hit) return 1;
     }
     /* lane 0 of the first group is u = a, then the samples k = 1 .. samples;
@@ -8513,20 +8523,20 @@ static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__ray_poly 
             }
             for (side = 0; side < 2; ++side) {
                 float sheet = side == 0 ? 1.0f : -1.0f, g0 = g_previous[side], g1 = g_lanes[side][lane], u = u_lanes[lane];
-                if (k == 1 && g0 == 0.0f) found |= hairobb__tube_hit(rs, p, prim, a, sheet, min_tangent2);
+                if (k == 1 && g0 == 0.0f) found |= hairobb__tube_hit(rs, seg, a, sheet);
                 if (zero[side] >> lane & 1u) {
-                    found |= hairobb__tube_hit(rs, p, prim, u, sheet, min_tangent2);
+                    found |= hairobb__tube_hit(rs, seg, u, sheet);
                 } else if (change[side] >> lane & 1u) {
                     if (side == 1 && !any_hit) {
-                        if (exit_count == 8) found |= hairobb__tube_exits(rs, p, prim, exits, &exit_count, min_tangent2, reach);
+                        if (exit_count == 8) found |= hairobb__tube_exits(rs, seg, exits, &exit_count);
                         exits[exit_count][0] = u_previous;
                         exits[exit_count][1] = u;
                         exits[exit_count][2] = g0;
                         exits[exit_count][3] = g1;
                         exits[exit_count][4] = z_previous;
                         exits[exit_count++][5] = z_lanes[lane];
-                    } else if (!hairobb__tube_root_unreachable(rs, u_previous, u, z_previous, z_lanes[lane], sheet, reach)) {
-                        found |= hairobb__tube_hit(rs, p, prim, hairobb__tube_root(p, u_previous, u, g0, g1, sheet), sheet, min_tangent2);
+                    } else if (!hairobb__tube_root_unreachable(rs, seg, u_previous, u, z_previous, z_lanes[lane], sheet)) {
+                        found |= hairobb__tube_hit(rs, seg, hairobb__tube_root(p, u_previous, u, g0, g1, sheet), sheet);
                     }
                 }
                 if (found && any_hit) return 1;
@@ -8538,10 +8548,10 @@ static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__ray_poly 
         z_previous = z_lanes[7];
         u_previous = u_lanes[7];
     }
-    found |= hairobb__tube_exits(rs, p, prim, exits, &exit_count, min_tangent2, reach);
+    found |= hairobb__tube_exits(rs, seg, exits, &exit_count);
     if (b == 1.0f) {
         hairobb__tube_at(p, b, ends);
-        found |= hairobb__tube_joint(rs, p, prim, ends, 1, min_tangent2);
+        found |= hairobb__tube_joint(rs, seg, ends, 1);
     }
     return found;
 }
@@ -8564,12 +8574,12 @@ HAIROBB__INLINE hairobb__v8 hairobb__tube_square(const float a[4])
 }
 
 static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *rs, const hairobb__ray_curve *c, const float *cp,
-                                   uint32_t prim, int any_hit)
+                                   uint32_t prim, float t_base, int any_hit)
 {
-    hairobb__ray_poly poly;
+    hairobb__tube_segment seg;
     float at_end[HAIROBB__TUBE_AT], start = -1.0f, bernstein[8], scale;
     float sample_u[HAIROBB__TUBE_SAMPLES + 8], sample_q[HAIROBB__TUBE_SAMPLES + 8], sample_slope[HAIROBB__TUBE_SAMPLES + 8];
-    float min_tangent2 = 0.0f, margin, u_lo, u_hi, reach[2] = {0.0f, 0.0f};
+    float min_tangent2 = 0.0f, margin, u_lo, u_hi;
     int k, samples, found = 0, first_below, last_below, first;
     unsigned nonpositive, carry_inside = 0, carry_negative = 0;
     /* q's Bernstein coefficients bound it: all of them clearly positive,
@@ -8645,18 +8655,23 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
         min_tangent2 = hairobb__maxf(min_tangent2, noise * noise);
     }
     /* bounds on |z'| and r over the segment (hairobb__tube_root_unreachable) */
-    for (k = 0; k < 3; ++k) reach[0] = hairobb__maxf(reach[0], 3.0f * fabsf(c->z[k + 1] - c->z[k]));
-    reach[1] = hairobb__maxf(hairobb__v4_hmax(hairobb__v4_load(c->r)), 0.0f);
-    hairobb__to_power_form(c, &poly);
+    seg.reach[0] = 0.0f;
+    for (k = 0; k < 3; ++k) seg.reach[0] = hairobb__maxf(seg.reach[0], 3.0f * fabsf(c->z[k + 1] - c->z[k]));
+    seg.reach[1] = hairobb__maxf(hairobb__v4_hmax(hairobb__v4_load(c->r)), 0.0f);
+    hairobb__to_power_form(c, &seg.poly);
+    seg.bvh = bvh;
+    seg.prim = prim;
+    seg.t_base = t_base;
+    seg.min_tangent2 = min_tangent2;
     /* q and q' at every sample first, 8 at a time (at most 33 + 1; a last
        partial group's spare lanes at u_hi) */
     for (first = 0; first <= samples; first += 8) {
         hairobb__tube_sample_u(u_lo, u_hi, samples, first, sample_u + first);
-        hairobb__tube_q_v8(&poly, sample_u + first, sample_q + first, sample_slope + first);
+        hairobb__tube_q_v8(&seg.poly, sample_u + first, sample_q + first, sample_slope + first);
     }
     if (bvh->end_caps && u_lo == 0.0f && sample_q[0] <= 0.0f) {
-        hairobb__tube_at(&poly, u_lo, at_end);
-        if ((found = hairobb__tube_cap(bvh, rs, at_end, prim, 0, min_tangent2)) && any_hit) return 1;
+        hairobb__tube_at(&seg.poly, u_lo, at_end);
+        if ((found = hairobb__tube_cap(rs, &seg, at_end, 0)) && any_hit) return 1;
     }
     if (sample_q[0] < 0.0f) start = u_lo;   /* inside at the open end (or by rounding at u_lo) */
     /* the samples k where q goes in (q < 0) or out, or where q' goes from
@@ -8680,27 +8695,26 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
             q_previous = sample_q[k - 1];
             q = sample_q[k];
             if (start < 0.0f && q < 0.0f) {   /* into an inside interval */
-                start = hairobb__tube_edge(&poly, u_previous, u, q_previous, q);
+                start = hairobb__tube_edge(&seg.poly, u_previous, u, q_previous, q);
             } else if (start >= 0.0f && !(q < 0.0f)) {   /* out of it */
-                found |= hairobb__tube_inside(rs, &poly, prim, start, hairobb__tube_edge(&poly, u_previous, u, q_previous, q),
-                                              min_tangent2, reach, any_hit);
+                found |= hairobb__tube_inside(rs, &seg, start, hairobb__tube_edge(&seg.poly, u_previous, u, q_previous, q), any_hit);
                 start = -1.0f;
             } else if (start < 0.0f && sample_slope[k - 1] < 0.0f && sample_slope[k] > 0.0f) {
                 /* both outside, but q has a minimum between them: inside there? */
-                float low = hairobb__tube_low(&poly, u_previous, u, sample_slope[k - 1], sample_slope[k]), at[HAIROBB__TUBE_AT];
-                hairobb__tube_at(&poly, low, at);
+                float low = hairobb__tube_low(&seg.poly, u_previous, u, sample_slope[k - 1], sample_slope[k]), at[HAIROBB__TUBE_AT];
+                hairobb__tube_at(&seg.poly, low, at);
                 if (at[4] < 0.0f)
-                    found |= hairobb__tube_inside(rs, &poly, prim, hairobb__tube_edge(&poly, u_previous, low, q_previous, at[4]),
-                                                  hairobb__tube_edge(&poly, low, u, at[4], q), min_tangent2, reach, any_hit);
+                    found |= hairobb__tube_inside(rs, &seg, hairobb__tube_edge(&seg.poly, u_previous, low, q_previous, at[4]),
+                                                  hairobb__tube_edge(&seg.poly, low, u, at[4], q), any_hit);
             }
             if (found && any_hit) return 1;
         }
     }
-    if (start >= 0.0f) found |= hairobb__tube_inside(rs, &poly, prim, start, u_hi, min_tangent2, reach, any_hit);   /* inside at the other open end */
+    if (start >= 0.0f) found |= hairobb__tube_inside(rs, &seg, start, u_hi, any_hit);   /* inside at the other open end */
     if (found && any_hit) return 1;
     if (bvh->end_caps && u_hi == 1.0f && sample_q[samples] <= 0.0f) {
-        hairobb__tube_at(&poly, u_hi, at_end);
-        found |= hairobb__tube_cap(bvh, rs, at_end, prim, 1, min_tangent2);
+        hairobb__tube_at(&seg.poly, u_hi, at_end);
+        found |= hairobb__tube_cap(rs, &seg, at_end, 1);
     }
     return found;
 }
@@ -8773,24 +8787,22 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
            depth of the segment's ends (as Embree's round curves): relative
            to a far origin the depth and the offsets from the ray carried a
            few ulps of the distance, several times t's own rounding. That
-           point is rounded
-           (by far more than r where the ray starts at 1e4): the rounding,
-           kept exactly (hairobb__ray_point), is taken
+           point is rounded (by far more than r where the ray starts at
+           1e4): the rounding, kept exactly (hairobb__ray_point), is taken
            off the differences of the nearby points. */
-        float base[4], error[4];
-        rs->segment.tube_t_base = 0.5f * (c.z[0] + c.z[3]) * rs->line.inv_dir_length;
-        if (hairobb__ray_point(rs, rs->segment.tube_t_base, 0.0f, base, error)) {   /* reach 0: always exact, so joints meet */
+        float base[4], error[4], t_base = 0.5f * (c.z[0] + c.z[3]) * rs->line.inv_dir_length;
+        if (hairobb__ray_point(rs, t_base, 0.0f, base, error)) {   /* reach 0: always exact, so joints meet */
             hairobb__ray_points_v4(base, cp, &qx, &qy, &qz, &r);
             qx = hairobb__v4_sub(qx, hairobb__v4_set1(error[0]));
             qy = hairobb__v4_sub(qy, hairobb__v4_set1(error[1]));
             qz = hairobb__v4_sub(qz, hairobb__v4_set1(error[2]));
         } else {   /* the split overflowed (|dir| near FLT_MAX): as tested above */
-            rs->segment.tube_t_base = 0.0f;
+            t_base = 0.0f;
         }
         hairobb__v4_store(c.x, hairobb__ray_row_v4(rs, 0, qx, qy, qz));
         hairobb__v4_store(c.y, hairobb__ray_row_v4(rs, 1, qx, qy, qz));
         hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));
-        if (!hairobb__intersect_tube(bvh, rs, &c, cp, prim, any_hit)) return 0;
+        if (!hairobb__intersect_tube(bvh, rs, &c, cp, prim, t_base, any_hit)) return 0;
     } else {
         rs->segment.points = cp;
         if (!hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit)) return 0;
@@ -9697,6 +9709,8 @@ HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairob
 #define hairobb__v8 hairobb__v8_avx2
 #define hairobb__vn hairobb__vn_avx2
 #define hairobb__accept hairobb__accept_avx2
+#define hairobb__take hairobb__take_avx2
+#define hairobb__tube_segment hairobb__tube_segment_avx2
 #define hairobb__bezier_v4 hairobb__bezier_v4_avx2
 #define hairobb__chord_pad hairobb__chord_pad_avx2
 #define hairobb__converted_points hairobb__converted_points_avx2
