@@ -6747,9 +6747,10 @@ typedef struct hairobb__placed {
 /* A ray's state while it is traced, in rooms by how long each part lives:
    call (set once a call: filters, masks, the instance), line (the ray
    itself; tfar shrinks as hits are found), best (the nearest hit so far),
-   shown (what the filters were shown and ignored), skip (a secondary
-   ray's segment left) and segment (set by a segment's test for the
-   functions it calls, reset after it). */
+   shown (what the filters were shown and ignored) and skip (a secondary
+   ray's segment left). What a segment's test shares with the functions it
+   calls is theirs, passed as an argument (hairobb__ribbon_segment,
+   hairobb__tube_segment). */
 typedef struct hairobb__ray_call {
     int filtering;              /* a build-time or per-call filter is set */
     int any_hit;                /* occluded1 */
@@ -6802,17 +6803,12 @@ typedef struct hairobb__ray_skip {
     int active;                 /* tubes: set while a skipped segment is tested */
 } hairobb__ray_skip;
 
-typedef struct hairobb__ray_segment {
-    const float *points;        /* ribbons: the world points of the segment tested (its roots' t polished on them) */
-} hairobb__ray_segment;
-
 typedef struct hairobb__ray_state {
     hairobb__ray_call call;
     hairobb__ray_line line;
     hairobb__ray_best best;
     hairobb__ray_shown shown;
     hairobb__ray_skip skip;
-    hairobb__ray_segment segment;
 } hairobb__ray_state;
 
 #define HAIROBB__TINY_DIR 1e-18f
@@ -7763,6 +7759,17 @@ static float hairobb__ribbon_f(const hairobb__ray_poly *c, float u, float *deriv
     return products[0] + products[1];
 }
 
+/* What a ribbon's functions share about the segment tested: set once by
+   hairobb__intersect_curve and passed down (nothing of it in the ray's
+   state). poly is made only once a piece passes the chord cull. */
+typedef struct hairobb__ribbon_segment {
+    const hairobb_bvh *bvh;
+    const hairobb__ray_curve *curve;   /* its control points in ray space */
+    hairobb__ray_poly poly;     /* the same in power form */
+    const float *points;        /* its world points (its roots' t are polished on them) */
+    uint32_t prim;
+} hairobb__ribbon_segment;
+
 /* The depth of a ribbon's root at u on the segment of world points cp,
    taken again relative to the point of the ray at its first estimate t
    (that point's rounding kept exactly and taken off, as
@@ -7775,9 +7782,9 @@ static float hairobb__ribbon_f(const hairobb__ray_poly *c, float u, float *deriv
    the end point's own depth. Every root is polished before it is
    compared (hairobb__try_hit), so a ray with tnear = tfar = a hit's t
    finds that hit again, and the order of the tree does not matter. */
-static float hairobb__polished_t(const hairobb__ray_state *rs, float *u, float t)
+static float hairobb__polished_t(const hairobb__ray_state *rs, const hairobb__ribbon_segment *seg, float *u, float t)
 {
-    const float *cp = rs->segment.points, *unit_dir = rs->line.frame + 6;
+    const float *cp = seg->points, *unit_dir = rs->line.frame + 6;
     float reach = hairobb__maxf(hairobb__maxf(cp[3], cp[7]), hairobb__maxf(cp[11], cp[15]));
     float base[4], error[4], p[4], d[4], z, z1, f, f1, step, u_polished = *u, polished;
     hairobb__v4 shift, correction, p0, p1, p2, p3, value, tangent;
@@ -7817,14 +7824,14 @@ static float hairobb__polished_t(const hairobb__ray_state *rs, float *u, float t
     return polished;
 }
 
-static int hairobb__try_hit(hairobb__ray_state *rs, const hairobb__ray_poly *c, uint32_t prim, float u)
+static int hairobb__try_hit(hairobb__ray_state *rs, const hairobb__ribbon_segment *seg, float u)
 {
     float at[4], r, t;
-    hairobb__v4_store(at, hairobb__horner(c, hairobb__v4_set1(u), NULL, NULL));
+    hairobb__v4_store(at, hairobb__horner(&seg->poly, hairobb__v4_set1(u), NULL, NULL));
     r = hairobb__maxf(at[3], 0.0f);
     if (!(at[0] * at[0] + at[1] * at[1] <= r * r)) return 0;   /* hairobb__accept's test, before the polish */
-    t = hairobb__polished_t(rs, &u, at[2] * rs->line.inv_dir_length);
-    return hairobb__accept(rs, prim, u, t);
+    t = hairobb__polished_t(rs, seg, &u, at[2] * rs->line.inv_dir_length);
+    return hairobb__accept(rs, seg->prim, u, t);
 }
 
 /* Root of f in [lo, hi] where f changes sign: Newton steps, bisection when a
@@ -7855,9 +7862,10 @@ static float hairobb__solve_bracketed(const hairobb__ray_poly *c, float lo, floa
 /* Roots of f in [a, b] without a sign change across it: two can hide where
    f dips through zero; they are looked for around the extremum, where f'
    changes sign. */
-static int hairobb__refine_dip(hairobb__ray_state *rs, const hairobb__ray_poly *c, uint32_t prim,
-                               float a, float b, float fa, float fb, float da, float db)
+static int hairobb__refine_dip(hairobb__ray_state *rs, const hairobb__ribbon_segment *seg, float a, float b, float fa, float fb,
+                               float da, float db)
 {
+    const hairobb__ray_poly *c = &seg->poly;
     float lo = a, hi = b, middle, f_middle, d_middle;
     int found = 0, iteration;
     if ((da < 0.0f) == (db < 0.0f)) return 0;
@@ -7869,8 +7877,8 @@ static int hairobb__refine_dip(hairobb__ray_state *rs, const hairobb__ray_poly *
     middle = 0.5f * (lo + hi);
     f_middle = hairobb__ribbon_f(c, middle, NULL);
     if ((f_middle < 0.0f) == (fa < 0.0f) && f_middle != 0.0f) return 0;
-    found |= hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, a, middle, fa, f_middle));
-    found |= hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, middle, b, f_middle, fb));
+    found |= hairobb__try_hit(rs, seg, hairobb__solve_bracketed(c, a, middle, fa, f_middle));
+    found |= hairobb__try_hit(rs, seg, hairobb__solve_bracketed(c, middle, b, f_middle, fb));
     return found;
 }
 
@@ -7908,18 +7916,18 @@ static int hairobb__joint_at(const hairobb_bvh *bvh, uint32_t prim, int end, flo
    does not grow with P2' (a root at the end where P' = 0, as when control
    points repeat): their ribbon ends where it is defined to. The end's
    values come from its control points (end 0: points 0, 1; end 1: 3, 2). */
-static int hairobb__try_end(const hairobb_bvh *bvh, hairobb__ray_state *rs, const hairobb__ray_curve *c,
-                            const hairobb__ray_poly *poly, uint32_t prim, int end)
+static int hairobb__try_end(hairobb__ray_state *rs, const hairobb__ribbon_segment *seg, int end)
 {
+    const hairobb__ray_curve *c = seg->curve;
     int at = 3 * end, next = 1 + end;
     float x = c->x[at], y = c->y[at], dx = 3.0f * (c->x[next] - x), dy = 3.0f * (c->y[next] - y), f = x * dx + y * dy;
     float distance = hairobb__maxf(hairobb__maxf(hairobb__maxf(fabsf(x), fabsf(y)), fabsf(c->z[at])),
                                    hairobb__maxf(hairobb__maxf(fabsf(c->x[next]), fabsf(c->y[next])), fabsf(c->z[next])));
     float slack = distance * (16.0f * FLT_EPSILON), at_tip = slack * (fabsf(x) + fabsf(y));
     if (!(fabsf(f) <= at_tip) &&
-        !(fabsf(f) <= at_tip + slack * (fabsf(dx) + fabsf(dy)) && hairobb__joint_at(bvh, prim, end, rs->line.time)))
+        !(fabsf(f) <= at_tip + slack * (fabsf(dx) + fabsf(dy)) && hairobb__joint_at(seg->bvh, seg->prim, end, rs->line.time)))
         return 0;
-    return hairobb__try_hit(rs, poly, prim, (float)end);
+    return hairobb__try_hit(rs, seg, (float)end);
 }
 
 /* hairobb__ribbon_f and its derivative at 8 parameters at once, rounded as
@@ -7948,8 +7956,9 @@ static void hairobb__ribbon_f_v8(const hairobb__ray_poly *c, const float u_lanes
    roots. One root a quarter at most is found; several in one piece (bends,
    cusps) each have theirs. Most quarters have none of these: lane masks
    find those that do, which are then taken in order. */
-static int hairobb__refine_piece(hairobb__ray_state *rs, const hairobb__ray_poly *c, uint32_t prim, float a, float b)
+static int hairobb__refine_piece(hairobb__ray_state *rs, const hairobb__ribbon_segment *seg, float a, float b)
 {
+    const hairobb__ray_poly *c = &seg->poly;
     float u[8], f[8], d[8];
     hairobb__v8 f_lanes, d_lanes, zero = hairobb__v8_set1(0.0f);
     unsigned negative, positive, exact, cross, dip, bits;
@@ -7976,11 +7985,11 @@ static int hairobb__refine_piece(hairobb__ray_state *rs, const hairobb__ray_poly
     while (bits) {
         int k = hairobb__lowest_bit(bits);
         bits &= bits - 1;
-        if (exact >> k & 1u) found |= hairobb__try_hit(rs, c, prim, u[k]);
+        if (exact >> k & 1u) found |= hairobb__try_hit(rs, seg, u[k]);
         if (cross >> k & 1u)
-            found |= hairobb__try_hit(rs, c, prim, hairobb__solve_bracketed(c, u[k], u[k + 1], f[k], f[k + 1]));
+            found |= hairobb__try_hit(rs, seg, hairobb__solve_bracketed(c, u[k], u[k + 1], f[k], f[k + 1]));
         else if (dip >> k & 1u)
-            found |= hairobb__refine_dip(rs, c, prim, u[k], u[k + 1], f[k], f[k + 1], d[k], d[k + 1]);
+            found |= hairobb__refine_dip(rs, seg, u[k], u[k + 1], f[k], f[k + 1], d[k], d[k + 1]);
     }
     return found;
 }
@@ -8035,11 +8044,11 @@ HAIROBB__INLINE void hairobb__piece_ends(const float (*w)[8], const hairobb__ray
 #undef HAIROBB__EVAL
 }
 
-/* magnitude: the largest |x|, |y| of the control points */
+/* magnitude: the largest |x|, |y| of the control points; cp: their world points */
 static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *rs, const hairobb__ray_curve *c,
-                                    float magnitude, uint32_t prim, int any_hit)
+                                    float magnitude, uint32_t prim, const float *cp, int any_hit)
 {
-    hairobb__ray_poly poly;
+    hairobb__ribbon_segment seg;
     int have_poly = 0, chunk, found = 0;
     float pad = bvh->precision == HAIROBB_PRECISION_PIECES ? 0.0f : hairobb__chord_pad(c, bvh->pieces, magnitude);
 
@@ -8079,10 +8088,17 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
             if (bvh->precision == HAIROBB_PRECISION_PIECES) {
                 found |= hairobb__piece_hit(rs, c, prim, a, b, s_lanes[lane]);
             } else {
-                if (!have_poly) { hairobb__to_power_form(c, &poly); have_poly = 1; }
-                found |= hairobb__refine_piece(rs, &poly, prim, a, b);
-                if (k == 0) found |= hairobb__try_end(bvh, rs, c, &poly, prim, 0);
-                if (k == bvh->pieces - 1) found |= hairobb__try_end(bvh, rs, c, &poly, prim, 1);
+                if (!have_poly) {
+                    hairobb__to_power_form(c, &seg.poly);
+                    seg.bvh = bvh;
+                    seg.curve = c;
+                    seg.points = cp;
+                    seg.prim = prim;
+                    have_poly = 1;
+                }
+                found |= hairobb__refine_piece(rs, &seg, a, b);
+                if (k == 0) found |= hairobb__try_end(rs, &seg, 0);
+                if (k == bvh->pieces - 1) found |= hairobb__try_end(rs, &seg, 1);
             }
             if (found && any_hit) return 1;
         }
@@ -8804,8 +8820,7 @@ HAIROBB__INLINE int hairobb__intersect_segment(const hairobb_bvh *bvh, hairobb__
         hairobb__v4_store(c.z, hairobb__ray_row_v4(rs, 2, qx, qy, qz));
         if (!hairobb__intersect_tube(bvh, rs, &c, cp, prim, t_base, any_hit)) return 0;
     } else {
-        rs->segment.points = cp;
-        if (!hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, any_hit)) return 0;
+        if (!hairobb__intersect_curve(bvh, rs, &c, magnitude, prim, cp, any_hit)) return 0;
     }
     if (!any_hit) {   /* the nearest hit so far is on this segment */
         rs->best.curve = c;
@@ -9711,6 +9726,7 @@ HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairob
 #define hairobb__accept hairobb__accept_avx2
 #define hairobb__take hairobb__take_avx2
 #define hairobb__tube_segment hairobb__tube_segment_avx2
+#define hairobb__ribbon_segment hairobb__ribbon_segment_avx2
 #define hairobb__bezier_v4 hairobb__bezier_v4_avx2
 #define hairobb__chord_pad hairobb__chord_pad_avx2
 #define hairobb__converted_points hairobb__converted_points_avx2
