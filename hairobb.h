@@ -8137,7 +8137,17 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
    (hairobb__tube_joint), so strands are watertight there. */
 #define HAIROBB__TUBE_SAMPLES 32
 #define HAIROBB__TUBE_INSIDE_SAMPLES 8
-#define HAIROBB__TUBE_AT 8   /* values hairobb__tube_at gives */
+/* A tube's values at one u (hairobb__tube_at) */
+typedef struct hairobb__tube_point {
+    float w;                    /* x x' + y y' */
+    float dz;                   /* z' */
+    float z;
+    float s;                    /* S = sqrt(-q) inside, else 0 */
+    float q;                    /* |P2|^2 - r^2 */
+    float half_slope;           /* q' / 2 = w - r r' */
+    float tangent2;             /* |P'|^2 */
+    float scale;                /* |P2|^2 + r^2: q's magnitude */
+} hairobb__tube_point;
 
 /* From Horner's value v and derivative d (lanes x, y, z, r): q = |P2|^2 -
    r^2, with *r = max(r, 0) and *w = x x' + y y', rounded as every scalar
@@ -8149,22 +8159,21 @@ HAIROBB__INLINE float hairobb__tube_q(const float v[4], const float d[4], float 
     return v[0] * v[0] + v[1] * v[1] - *r * *r;
 }
 
-/* at u: out = w, z', z, S, q = |P2|^2 - r^2, q' / 2 = w - r r', |P'|^2,
-   |P2|^2 + r^2 (q's scale) */
-static void hairobb__tube_at(const hairobb__ray_poly *p, float u, float out[HAIROBB__TUBE_AT])
+/* The tube's values at u */
+static void hairobb__tube_at(const hairobb__ray_poly *p, float u, hairobb__tube_point *out)
 {
     hairobb__v4 d1, value = hairobb__horner(p, hairobb__v4_set1(u), &d1, NULL);
     float v[4], d[4], r, q;
     hairobb__v4_store(v, value);
     hairobb__v4_store(d, d1);
-    q = hairobb__tube_q(v, d, &r, &out[0]);
-    out[1] = d[2];
-    out[2] = v[2];
-    out[3] = q < 0.0f ? sqrtf(-q) : 0.0f;
-    out[4] = q;
-    out[5] = out[0] - r * d[3];
-    out[6] = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-    out[7] = q + 2.0f * r * r;
+    q = hairobb__tube_q(v, d, &r, &out->w);
+    out->dz = d[2];
+    out->z = v[2];
+    out->s = q < 0.0f ? sqrtf(-q) : 0.0f;
+    out->q = q;
+    out->half_slope = out->w - r * d[3];
+    out->tangent2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    out->scale = q + 2.0f * r * r;
 }
 
 /* x, y, z or r (lane k of the power form) at 8 values of u, and (where
@@ -8219,7 +8228,7 @@ static void hairobb__tube_g_v8(const hairobb__ray_poly *p, const float u_lanes[8
     hairobb__v8_store(exit_out, hairobb__v8_sub(w, along_s));
 }
 
-static float hairobb__tube_g(const float at[HAIROBB__TUBE_AT], float sheet) { return at[0] + sheet * at[1] * at[3]; }
+static float hairobb__tube_g(const hairobb__tube_point *at, float sheet) { return at->w + sheet * at->dz * at->s; }
 
 /* A point in [lo, hi] where q' changes sign (from negative, slope_lo at
    lo, to positive): the minimum of q between two outer samples, to 2^-14
@@ -8230,19 +8239,20 @@ static float hairobb__tube_low(const hairobb__ray_poly *p, float lo, float hi, f
     int iteration, side = 0;
     float tolerance = (hi - lo) * (1.0f / 16384.0f);
     for (iteration = 0; iteration < 20 && hi - lo > tolerance; ++iteration) {
-        float at[HAIROBB__TUBE_AT], u = lo + (hi - lo) * (slope_lo / (slope_lo - slope_hi));
+        hairobb__tube_point at;
+        float u = lo + (hi - lo) * (slope_lo / (slope_lo - slope_hi));
         if (!(u > lo && u < hi)) u = 0.5f * (lo + hi);
         if (u <= lo || u >= hi) break;
-        hairobb__tube_at(p, u, at);
-        if (at[5] == 0.0f) return u;
-        if ((at[5] < 0.0f) == (slope_lo < 0.0f)) {
+        hairobb__tube_at(p, u, &at);
+        if (at.half_slope == 0.0f) return u;
+        if ((at.half_slope < 0.0f) == (slope_lo < 0.0f)) {
             lo = u;
-            slope_lo = at[5];
+            slope_lo = at.half_slope;
             if (side == -1) slope_hi *= 0.5f;
             side = -1;
         } else {
             hi = u;
-            slope_hi = at[5];
+            slope_hi = at.half_slope;
             if (side == 1) slope_lo *= 0.5f;
             side = 1;
         }
@@ -8392,15 +8402,16 @@ static int hairobb__tube_root_unreachable(const hairobb__ray_state *rs, const ha
 static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__tube_segment *seg, float u, float sheet)
 {
     const hairobb__ray_poly *p = &seg->poly;
-    float at[HAIROBB__TUBE_AT], t;
-    hairobb__tube_at(p, u, at);
+    hairobb__tube_point at;
+    float t;
+    hairobb__tube_at(p, u, &at);
     /* no circle where the tangent (nearly) vanishes: at a repeated end
        point the tube shrinks to one circle, a set of no area, and a root
        there is float noise */
     /* a root just inside an interval's end can round to q > 0: q within
        its rounding counts as inside (S = 0 there) */
-    if (!(at[4] <= at[7] * (8.0f * FLT_EPSILON)) || !(at[6] > seg->min_tangent2)) return 0;
-    t = seg->t_base + (at[2] - sheet * at[3]) * rs->line.inv_dir_length;
+    if (!(at.q <= at.scale * (8.0f * FLT_EPSILON)) || !(at.tangent2 > seg->min_tangent2)) return 0;
+    t = seg->t_base + (at.z - sheet * at.s) * rs->line.inv_dir_length;
     if (rs->call.cull_back_faces || (rs->skip.active && t < rs->skip.t)) {
         /* whether the root faces the ray (an entry, +1) or away (-1), by
            the normal's component along it (ray space: R = (-x, -y, -sheet
@@ -8414,9 +8425,9 @@ static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__tube_segment
         hairobb__v4_store(v, value);
         hairobb__v4_store(d, d1);
         hairobb__v4_store(dd, d2);
-        denominator = at[6] + v[0] * dd[0] + v[1] * dd[1] + sheet * at[3] * dd[2];
+        denominator = at.tangent2 + v[0] * dd[0] + v[1] * dd[1] + sheet * at.s * dd[2];
         k = denominator != 0.0f ? hairobb__maxf(v[3], 0.0f) * d[3] / denominator : 0.0f;
-        facing = -sheet * at[3] - k * d[2] > 0.0f ? -1.0f : 1.0f;
+        facing = -sheet * at.s - k * d[2] > 0.0f ? -1.0f : 1.0f;
         if (facing < 0.0f && rs->call.cull_back_faces) return 0;
         if (rs->skip.active && t < rs->skip.t && facing == rs->skip.sheet) return 0;
     }
@@ -8431,16 +8442,16 @@ static int hairobb__tube_hit(hairobb__ray_state *rs, const hairobb__tube_segment
    at depth z + w / z' (hairobb__intersect_tube's terms), at distance^2 q +
    r^2 + (w / z')^2 from the centre. A ray going along the outward normal
    (-P' at end 0, P' at end 1) leaves the fibre there: an exit (sheet -1). */
-static int hairobb__tube_cap(hairobb__ray_state *rs, const hairobb__tube_segment *seg, const float at[HAIROBB__TUBE_AT], int end)
+static int hairobb__tube_cap(hairobb__ray_state *rs, const hairobb__tube_segment *seg, const hairobb__tube_point *at, int end)
 {
-    float along = at[1], offset, t, sheet;
+    float along = at->dz, offset, t, sheet;
     /* the ray in the cap's plane, or no plane (hairobb__tube_hit) */
-    if (!(along != 0.0f) || !(at[6] > seg->min_tangent2)) return 0;
-    offset = at[0] / along;
-    if (!(at[4] + offset * offset <= 0.0f)) return 0;
+    if (!(along != 0.0f) || !(at->tangent2 > seg->min_tangent2)) return 0;
+    offset = at->w / along;
+    if (!(at->q + offset * offset <= 0.0f)) return 0;
     sheet = (along > 0.0f) == (end == 0) ? 1.0f : -1.0f;
     if (sheet < 0.0f && rs->call.cull_back_faces) return 0;
-    t = seg->t_base + (at[2] + offset) * rs->line.inv_dir_length;
+    t = seg->t_base + (at->z + offset) * rs->line.inv_dir_length;
     if (rs->skip.active && sheet == rs->skip.sheet && t < rs->skip.t) return 0;
     if (!(t >= rs->line.tnear) || !(t <= rs->line.tfar) || hairobb__joint_at(seg->bvh, seg->prim, end, rs->line.time)) return 0;
     if (!hairobb__take(rs, seg->prim, (float)end, t, 1)) return 0;
@@ -8454,9 +8465,9 @@ static int hairobb__tube_cap(hairobb__ray_state *rs, const hairobb__tube_segment
    end itself is a root where g there is within its rounding (w and z' S
    off by tens of ulps of the point's depth and distance times |P'|). at:
    hairobb__tube_at at u = end. */
-static int hairobb__tube_joint(hairobb__ray_state *rs, const hairobb__tube_segment *seg, const float at[HAIROBB__TUBE_AT], int end)
+static int hairobb__tube_joint(hairobb__ray_state *rs, const hairobb__tube_segment *seg, const hairobb__tube_point *at, int end)
 {
-    float slack = (fabsf(at[2]) + sqrtf(at[7])) * sqrtf(at[6]) * (64.0f * FLT_EPSILON), sheet;
+    float slack = (fabsf(at->z) + sqrtf(at->scale)) * sqrtf(at->tangent2) * (64.0f * FLT_EPSILON), sheet;
     int found = 0, joint = -1;
     for (sheet = 1.0f; sheet >= -1.0f; sheet -= 2.0f) {
         float g = hairobb__tube_g(at, sheet);
@@ -8467,14 +8478,20 @@ static int hairobb__tube_joint(hairobb__ray_state *rs, const hairobb__tube_segme
     return found;
 }
 
+/* A sign change of one sheet's g between two samples: their u, g and
+   depth z */
+typedef struct hairobb__tube_change {
+    float u0, u1, g0, g1, z0, z1;
+} hairobb__tube_change;
+
 /* The exit sheet's roots held back by hairobb__tube_inside, in u order. */
-static int hairobb__tube_exits(hairobb__ray_state *rs, const hairobb__tube_segment *seg, float exits[8][6], int *count)
+static int hairobb__tube_exits(hairobb__ray_state *rs, const hairobb__tube_segment *seg, hairobb__tube_change exits[8], int *count)
 {
     int k, found = 0;
     for (k = 0; k < *count; ++k) {
-        const float *e = exits[k];
-        if (!hairobb__tube_root_unreachable(rs, seg, e[0], e[1], e[4], e[5], -1.0f))
-            found |= hairobb__tube_hit(rs, seg, hairobb__tube_root(&seg->poly, e[0], e[1], e[2], e[3], -1.0f), -1.0f);
+        const hairobb__tube_change *e = &exits[k];
+        if (!hairobb__tube_root_unreachable(rs, seg, e->u0, e->u1, e->z0, e->z1, -1.0f))
+            found |= hairobb__tube_hit(rs, seg, hairobb__tube_root(&seg->poly, e->u0, e->u1, e->g0, e->g1, -1.0f), -1.0f);
     }
     *count = 0;
     return found;
@@ -8485,19 +8502,20 @@ static int hairobb__tube_exits(hairobb__ray_state *rs, const hairobb__tube_segme
 static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__tube_segment *seg, float a, float b, int any_hit)
 {
     const hairobb__ray_poly *p = &seg->poly;
-    float ends[HAIROBB__TUBE_AT], u_lanes[8], g_lanes[2][8], z_lanes[8], g_previous[2], u_previous = a, z_previous = 0.0f;
+    hairobb__tube_point end;
+    float u_lanes[8], g_lanes[2][8], z_lanes[8], g_previous[2], u_previous = a, z_previous = 0.0f;
     /* the exit sheet's sign changes, refined after the entry sheet's (a
        nearest hit) unless hairobb__tube_root_unreachable then rules them
-       out: u0, u1, g0, g1, z0, z1 each */
-    float exits[8][6];
+       out */
+    hairobb__tube_change exits[8];
     /* a long interval (a ray along a bent fibre, which can cross one sheet
        twice) at the outer samples' spacing at least */
     int k, first, lane, side, found = 0, exit_count = 0, samples = (int)((b - a) * (float)(4 * HAIROBB__TUBE_SAMPLES)) + 1;
     unsigned carry_negative[2] = {0u, 0u}, carry_exact[2] = {0u, 0u};
     if (samples < HAIROBB__TUBE_INSIDE_SAMPLES) samples = HAIROBB__TUBE_INSIDE_SAMPLES;
     if (a == 0.0f) {
-        hairobb__tube_at(p, a, ends);
-        found |= hairobb__tube_joint(rs, seg, ends, 0);
+        hairobb__tube_at(p, a, &end);
+        found |= hairobb__tube_joint(rs, seg, &end, 0);
         if (found && any_hit) return 1;
     }
     /* lane 0 of the first group is u = a, then the samples k = 1 .. samples;
@@ -8545,12 +8563,12 @@ static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__tube_segm
                 } else if (change[side] >> lane & 1u) {
                     if (side == 1 && !any_hit) {
                         if (exit_count == 8) found |= hairobb__tube_exits(rs, seg, exits, &exit_count);
-                        exits[exit_count][0] = u_previous;
-                        exits[exit_count][1] = u;
-                        exits[exit_count][2] = g0;
-                        exits[exit_count][3] = g1;
-                        exits[exit_count][4] = z_previous;
-                        exits[exit_count++][5] = z_lanes[lane];
+                        exits[exit_count].u0 = u_previous;
+                        exits[exit_count].u1 = u;
+                        exits[exit_count].g0 = g0;
+                        exits[exit_count].g1 = g1;
+                        exits[exit_count].z0 = z_previous;
+                        exits[exit_count++].z1 = z_lanes[lane];
                     } else if (!hairobb__tube_root_unreachable(rs, seg, u_previous, u, z_previous, z_lanes[lane], sheet)) {
                         found |= hairobb__tube_hit(rs, seg, hairobb__tube_root(p, u_previous, u, g0, g1, sheet), sheet);
                     }
@@ -8566,8 +8584,8 @@ static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__tube_segm
     }
     found |= hairobb__tube_exits(rs, seg, exits, &exit_count);
     if (b == 1.0f) {
-        hairobb__tube_at(p, b, ends);
-        found |= hairobb__tube_joint(rs, seg, ends, 1);
+        hairobb__tube_at(p, b, &end);
+        found |= hairobb__tube_joint(rs, seg, &end, 1);
     }
     return found;
 }
@@ -8593,7 +8611,8 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
                                    uint32_t prim, float t_base, int any_hit)
 {
     hairobb__tube_segment seg;
-    float at_end[HAIROBB__TUBE_AT], start = -1.0f, bernstein[8], scale;
+    hairobb__tube_point at_end;
+    float start = -1.0f, bernstein[8], scale;
     float sample_u[HAIROBB__TUBE_SAMPLES + 8], sample_q[HAIROBB__TUBE_SAMPLES + 8], sample_slope[HAIROBB__TUBE_SAMPLES + 8];
     float min_tangent2 = 0.0f, margin, u_lo, u_hi;
     int k, samples, found = 0, first_below, last_below, first;
@@ -8686,8 +8705,8 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
         hairobb__tube_q_v8(&seg.poly, sample_u + first, sample_q + first, sample_slope + first);
     }
     if (bvh->end_caps && u_lo == 0.0f && sample_q[0] <= 0.0f) {
-        hairobb__tube_at(&seg.poly, u_lo, at_end);
-        if ((found = hairobb__tube_cap(rs, &seg, at_end, 0)) && any_hit) return 1;
+        hairobb__tube_at(&seg.poly, u_lo, &at_end);
+        if ((found = hairobb__tube_cap(rs, &seg, &at_end, 0)) && any_hit) return 1;
     }
     if (sample_q[0] < 0.0f) start = u_lo;   /* inside at the open end (or by rounding at u_lo) */
     /* the samples k where q goes in (q < 0) or out, or where q' goes from
@@ -8717,11 +8736,12 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
                 start = -1.0f;
             } else if (start < 0.0f && sample_slope[k - 1] < 0.0f && sample_slope[k] > 0.0f) {
                 /* both outside, but q has a minimum between them: inside there? */
-                float low = hairobb__tube_low(&seg.poly, u_previous, u, sample_slope[k - 1], sample_slope[k]), at[HAIROBB__TUBE_AT];
-                hairobb__tube_at(&seg.poly, low, at);
-                if (at[4] < 0.0f)
-                    found |= hairobb__tube_inside(rs, &seg, hairobb__tube_edge(&seg.poly, u_previous, low, q_previous, at[4]),
-                                                  hairobb__tube_edge(&seg.poly, low, u, at[4], q), any_hit);
+                float low = hairobb__tube_low(&seg.poly, u_previous, u, sample_slope[k - 1], sample_slope[k]);
+                hairobb__tube_point at;
+                hairobb__tube_at(&seg.poly, low, &at);
+                if (at.q < 0.0f)
+                    found |= hairobb__tube_inside(rs, &seg, hairobb__tube_edge(&seg.poly, u_previous, low, q_previous, at.q),
+                                                  hairobb__tube_edge(&seg.poly, low, u, at.q, q), any_hit);
             }
             if (found && any_hit) return 1;
         }
@@ -8729,8 +8749,8 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
     if (start >= 0.0f) found |= hairobb__tube_inside(rs, &seg, start, u_hi, any_hit);   /* inside at the other open end */
     if (found && any_hit) return 1;
     if (bvh->end_caps && u_hi == 1.0f && sample_q[samples] <= 0.0f) {
-        hairobb__tube_at(&seg.poly, u_hi, at_end);
-        found |= hairobb__tube_cap(rs, &seg, at_end, 1);
+        hairobb__tube_at(&seg.poly, u_hi, &at_end);
+        found |= hairobb__tube_cap(rs, &seg, &at_end, 1);
     }
     return found;
 }
@@ -9726,6 +9746,8 @@ HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairob
 #define hairobb__accept hairobb__accept_avx2
 #define hairobb__take hairobb__take_avx2
 #define hairobb__tube_segment hairobb__tube_segment_avx2
+#define hairobb__tube_point hairobb__tube_point_avx2
+#define hairobb__tube_change hairobb__tube_change_avx2
 #define hairobb__ribbon_segment hairobb__ribbon_segment_avx2
 #define hairobb__bezier_v4 hairobb__bezier_v4_avx2
 #define hairobb__chord_pad hairobb__chord_pad_avx2
