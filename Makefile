@@ -22,7 +22,7 @@ B         = build
 X86    := $(filter x86_64% i386% i486% i586% i686% amd64%,$(shell $(CC) -dumpmachine 2>/dev/null))
 QUICK  = $(B)/test_options $(B)/test_conservative $(if $(X86),$(B)/test_simd $(B)/test_simd_w8) $(B)/test_unit \
          $(B)/test_unit_w8 $(B)/test_stress $(B)/test_reference $(B)/test_hair $(B)/test_filter $(B)/test_refit $(B)/test_refit_w4 \
-         $(B)/test_save $(B)/test_motion $(B)/test_scene $(B)/test_groups
+         $(B)/test_save $(B)/test_motion $(B)/test_instances $(B)/test_groups
 CHECK_TESTS = $(QUICK) $(B)/check_test_secondary
 # `make test`: the quick tier's programs and those needing Embree (and furBall_A)
 TESTS = $(QUICK) $(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_scenes $(B)/test_threads $(B)/test_bases $(B)/test_round
@@ -32,7 +32,7 @@ TESTS = $(QUICK) $(B)/test_secondary $(B)/test_accuracy $(B)/test_far $(B)/test_
 # at a time on 2 cores
 SANITIZED = $(B)/fuzz_build_45s $(B)/asan_test_options $(B)/fuzz_scene_30s $(B)/fuzz_groups_30s $(B)/fuzz_hair_30s $(B)/fuzz_load_30s \
             $(B)/asan_test_round $(B)/asan_test_unit_w8 \
-            $(B)/asan_test_stress $(B)/tsan_test_threads $(B)/asan_test_reference $(B)/asan_test_save_w4 $(B)/asan_test_scene \
+            $(B)/asan_test_stress $(B)/tsan_test_threads $(B)/asan_test_reference $(B)/asan_test_save_w4 $(B)/asan_test_instances \
             $(B)/asan_test_groups
 ASAN      = -O1 -g -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 TSAN      = -O1 -g -fsanitize=thread
@@ -67,7 +67,7 @@ $(B):
 #   test_filter        the any-hit filter against the reference
 #   test_save          BVHs saved and loaded: round trips traced to the bit, bad
 #                      bytes, other hair
-#   test_scene         instances of BVHs under a top level against the
+#   test_instances     instances of BVHs under a top level against the
 #                      references over the hair placed in world space
 #   test_groups        several hair groups in one BVH against one BVH over
 #                      the same hair: ids, masks, filters, refit, motion
@@ -121,7 +121,7 @@ $(B)/asan_%: $(TEST_HEADERS) | $(B)
 $(B)/tsan_%: $(TEST_HEADERS) | $(B)
 	$(CC) $(WARN) $(TSAN) -ffp-contract=off -I. $(ARCH) $(filter %.c,$^) -o $@ $(LIBS)
 $(B)/asan_test_reference: tests/test_reference.c
-$(B)/asan_test_scene: tests/test_scene.c
+$(B)/asan_test_instances: tests/test_instances.c
 $(B)/asan_test_groups: tests/test_groups.c
 # round curves' stress and degenerate segments (and their Embree comparison)
 $(B)/asan_test_round: tests/test_round.c | deps

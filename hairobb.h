@@ -581,7 +581,7 @@
      circles become ellipses: the shape the map makes of them.
      Round-off: the ray is mapped in double and rounded once; against one
      BVH built over the same hair placed in world space, hits agree as
-     one BVH's agree with the reference (tests/test_scene.c).
+     one BVH's agree with the reference (tests/test_instances.c).
 
 
   12. .hair FILES
@@ -7494,22 +7494,6 @@ HAIROBB__INLINE int hairobb__normalize3(float n[3])
     return 1;
 }
 
-/* A hit in an instance's object space taken to world space: the tangent
-   by the map, the normal by its inverse transposed; t, u, v are the same. */
-static void hairobb__hit_to_world(const hairobb__placed *placed, uint32_t id, hairobb_hit *hit)
-{
-    const float *m = placed->to_world, *inv = placed->to_object;
-    float tangent[3], n[3];
-    int i;
-    for (i = 0; i < 3; ++i) {
-        tangent[i] = m[4 * i] * hit->tangent[0] + m[4 * i + 1] * hit->tangent[1] + m[4 * i + 2] * hit->tangent[2];
-        n[i] = inv[i] * hit->Ng[0] + inv[4 + i] * hit->Ng[1] + inv[8 + i] * hit->Ng[2];
-    }
-    if (hairobb__normalize3(n)) memcpy(hit->Ng, n, sizeof n);
-    memcpy(hit->tangent, tangent, sizeof tangent);
-    hit->instance_id = id;
-}
-
 /* hairobb__bezier's value and first derivative for 4 curves at once, one
    per lane, rounded as it rounds: rows p0..p3 hold the control points. */
 HAIROBB__INLINE void hairobb__bezier_v4(hairobb__v4 p0, hairobb__v4 p1, hairobb__v4 p2, hairobb__v4 p3, float u,
@@ -7675,6 +7659,23 @@ static int hairobb__ignored_before(const hairobb__ray_state *rs, uint32_t prim, 
         }
     }
     return 0;
+}
+
+/* A hit in an instance's object space taken to world space (>>scene; a
+   filter is shown world hits): the tangent by the map, the normal by its
+   inverse transposed; t, u, v are the same. */
+static void hairobb__hit_to_world(const hairobb__placed *placed, uint32_t id, hairobb_hit *hit)
+{
+    const float *m = placed->to_world, *inv = placed->to_object;
+    float tangent[3], n[3];
+    int i;
+    for (i = 0; i < 3; ++i) {
+        tangent[i] = m[4 * i] * hit->tangent[0] + m[4 * i + 1] * hit->tangent[1] + m[4 * i + 2] * hit->tangent[2];
+        n[i] = inv[i] * hit->Ng[0] + inv[4 + i] * hit->Ng[1] + inv[8 + i] * hit->Ng[2];
+    }
+    if (hairobb__normalize3(n)) memcpy(hit->Ng, n, sizeof n);
+    memcpy(hit->tangent, tangent, sizeof tangent);
+    hit->instance_id = id;
 }
 
 /* Whether a filter drops the hit at u, t on segment prim (showing it the

@@ -1,4 +1,4 @@
-/* test_scene.c - several hair groups in one scene (SCENES): instances of
+/* test_instances.c - several hair groups in one scene (SCENES): instances of
    BVHs under a top level, against the double-precision references over
    the same hair placed in world space.
 
