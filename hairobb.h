@@ -9738,8 +9738,9 @@ HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairob
 /* ------------------------------------------------------------------------ */
 /* The file includes itself (HAIROBB_SELF, found first in its own directory)
    with every name the kernels define suffixed _avx2: a name missing here is
-   a redefinition error. Nothing follows, so the names need no #undef. No
-   FMA: the paths round alike. */
+   a redefinition error, and tests/check_dispatch_list.sh checks the list
+   against the kernels both ways. Nothing follows, so the names need no
+   #undef. No FMA: the paths round alike. */
 #if HAIROBB__DISPATCH
 #define hairobb__v4 hairobb__v4_avx2
 #define hairobb__v8 hairobb__v8_avx2
