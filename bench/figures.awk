@@ -106,8 +106,10 @@ function range(key, format,    a, b) {
     return a == b ? a : a "-" b
 }
 
-# 1.9e-4, not 1.9e-04
+# 1.9e-4, not 1.9e-04; 1 and above as plain numbers
 function sci(x,    text) {
+    if (x >= 10) return sprintf("%.0f", x)
+    if (x >= 1) return sprintf("%.1f", x)
     text = sprintf("%.1e", x)
     sub(/e-0/, "e-", text); sub(/e\+0/, "e+", text)
     return text
