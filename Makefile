@@ -284,7 +284,7 @@ ab: | $(B)
 	sh bench/ab.sh $(AB_BASE) $(AB)
 
 # the figures the docs quote (bench/figures.sh): the target scenes against
-# Embree, round curves and build time, about 18 minutes on 2 cores (not part
+# Embree, round curves and build time, about 16 minutes on 2 cores (not part
 # of `make test`); saved as bench/results/figures-DATE.txt, and the generated
 # regions of docs/benchmarking.md and README.md written from it.
 # FIGURES_FROM=FILE writes the pages from a stored run, without running.

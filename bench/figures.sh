@@ -1,7 +1,7 @@
 #!/bin/sh
 # figures.sh - `make figures`: the run behind the figures the docs quote.
 #
-#   sh bench/figures.sh               runs the bench (about 18 minutes on 2 cores), saves
+#   sh bench/figures.sh               runs the bench (about 16 minutes on 2 cores), saves
 #                                     its output as bench/results/figures-YYYY-MM-DD.txt (UTC),
 #                                     then writes the pages' generated regions from that file
 #   sh bench/figures.sh --from FILE   writes the pages from a stored run (seconds, no bench)
@@ -37,10 +37,10 @@ PAGES="README.md docs/benchmarking.md"
 
 # What the docs quote: the target scenes (combed fur at three sizes, the two
 # files, curly and crossing hair), each library's defaults and peers. Rounds
-# and resolution keep the whole run near 18 minutes on 2 cores (Zen 5): the
-# trace run about 7, the round curves about 4, the builds about 8 (combed
-# 10M's three builds take 40 s a round). Run at 11, 11 and 7 rounds it took
-# 11.5 minutes.
+# and resolution keep the whole run near 16 minutes on 2 cores (Zen 5): the
+# trace run about 5 (most of it making and building combed 10M), the round
+# curves about 4, the builds about 8 (combed 10M's three builds take 40 s a
+# round). At 11, 11 and 7 rounds it took 11.5 minutes.
 TARGETS=combed,combed:2M,combed:10M,furball,straight,curly:500k,crossing:500k
 ROUND_SCENES=combed,combed:2M,furball,straight,curly:500k,crossing:500k
 TRACE_ROUNDS=21 ROUND_ROUNDS=21 BUILD_ROUNDS=11 RES=512 ACCURACY=16384
