@@ -1,6 +1,7 @@
 # hairobb: `make test` runs every test, `make check` the quick tier (a C99
 # compiler only: no Embree, clang, sanitizers or apt-get), `make bench` the
-# benchmark on the built-in fur scene, `make examples` builds the examples.
+# benchmark on the built-in fur scene, `make figures` the runs behind
+# the docs' figures, `make examples` builds the examples.
 # the test programs build on every core, and run as many at once (tests/run_all.sh)
 MAKEFLAGS += -j$(shell nproc 2>/dev/null || echo 2)
 CC       ?= cc
@@ -41,7 +42,7 @@ FUZZCC    = clang
 FUZZ      = -std=c99 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -ffp-contract=off -I.
 FUZZ_SECONDS ?= 1800
 
-.PHONY: all test check deps compile-matrix bench profile ab examples clean fuzz tree-hashes
+.PHONY: all test check deps compile-matrix bench profile ab examples clean fuzz tree-hashes figures
 all: $(TESTS) $(SANITIZED) $(B)/bench examples
 
 deps:
@@ -286,6 +287,14 @@ profile: $(B)/bench_profile $(B)/bench_counted
 AB_BASE ?= HEAD
 ab: | $(B)
 	sh bench/ab.sh $(AB_BASE) $(AB)
+
+# the figures the docs quote (bench/figures.sh): the target scenes against
+# Embree, round curves and build time, about 16 minutes on 2 cores (not part
+# of `make test`); saved as bench/results/figures-DATE.txt, and the generated
+# regions of docs/benchmarking.md and README.md written from it.
+# FIGURES_FROM=FILE writes the pages from a stored run, without running.
+figures: $(if $(FIGURES_FROM),,$(B)/bench)
+	sh bench/figures.sh $(if $(FIGURES_FROM),--from $(FIGURES_FROM))
 
 examples: $(B)/minimal $(B)/render $(B)/embree_swap $(B)/groom
 

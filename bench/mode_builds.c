@@ -2,16 +2,24 @@
 #include "bench/bench.h"
 
 /* --builds: per scene, --rounds rounds of three builds, each freed before
-   the next: hairobb's defaults on all cores, the same on 1 thread, Embree
-   flat r4 on all cores (a Catmull-Rom scene: both read its Catmull-Rom
-   curves, hairobb without the copy). Medians [min-max] of the seconds, and
-   of the ratios to Embree taken within each round; hairobb's transient
-   bytes a segment (allocator meter). */
+   the next: hairobb's defaults (the Bezier copy included) on all cores, the
+   same on 1 thread, Embree flat r4 on all cores (a Catmull-Rom scene: both
+   read its Catmull-Rom curves). Medians [min-max] of the seconds, and of the
+   ratios to Embree taken within each round; bytes a segment and hairobb's
+   transient bytes a segment (allocator meter). On stdout, and a row a scene
+   and build in the TSV (--tsv). */
 int run_builds(const options *o)
 {
     enum { ALL_CORES, ONE_THREAD, EMBREE, BUILDS };
     static const char *const names[BUILDS] = {"hairobb, all cores", "hairobb, 1 thread", "Embree flat r4, all cores"};
     int failures = 0;
+    static const char *const keys[BUILDS] = {"hairobb", "hairobb-1t", "embree-r4"};
+    FILE *tsv = fopen(o->tsv_path, "w");
+    if (!tsv)
+        fprintf(stderr, "bench: cannot write %s: %s\n", o->tsv_path, strerror(errno));
+    else
+        fputs("scene\tsegments\tbuild\tlabel\tseconds\tseconds_min\tseconds_max\tratio\tratio_min\tratio_max"
+              "\tbytes_per_segment\ttransient_bytes_per_segment\trounds\n", tsv);
     printf("\nbuild time in rounds (%d rounds; each round builds the three in turn, each freed before the next)\n", o->rounds);
     printf("%-12s %12s %-26s %-24s %-24s %-18s %s\n", "scene", "segments", "build", "seconds", "/ Embree (in round)",
            "bytes/segment", "transient b/seg");
@@ -60,7 +68,6 @@ int run_builds(const options *o)
                     memset(&build_options, 0, sizeof build_options);
                     build_options.threads = k == ONE_THREAD ? 1 : 0;
                     build_options.basis = catmull_rom ? HAIROBB_BASIS_CATMULL_ROM : HAIROBB_BASIS_BEZIER;
-                    build_options.bezier_copy = HAIROBB_OFF;
                     hairobb_bvh *bvh = build_metered(&s, s.vertices, &build_options, names[k], &seconds[k][r], &transient);
                     ok = bvh != NULL;
                     if (bvh)
@@ -88,8 +95,24 @@ int run_builds(const options *o)
                 snprintf(transient_cell, sizeof transient_cell, "%.1f", (double)transient / (double)s.segment_count);
             printf("%-12s %12zu %-26s %-24s %-24s %-18.1f %s\n", o->scenes[c], s.segment_count, names[k], cell[0], cell[1],
                    (double)memory[k] / (double)s.segment_count, transient_cell);
+            if (tsv) {
+                fprintf(tsv, "%s\t%zu\t%s\t%s", s.name, s.segment_count, keys[k], names[k]);
+                tsv_number(tsv, "\t%.6f", t.median);
+                tsv_number(tsv, "\t%.6f", t.min);
+                tsv_number(tsv, "\t%.6f", t.max);
+                tsv_number(tsv, "\t%.4f", builds == BUILDS ? q.median : NAN);
+                tsv_number(tsv, "\t%.4f", builds == BUILDS ? q.min : NAN);
+                tsv_number(tsv, "\t%.4f", builds == BUILDS ? q.max : NAN);
+                tsv_number(tsv, "\t%.3f", (double)memory[k] / (double)s.segment_count);
+                tsv_number(tsv, "\t%.3f", k != EMBREE ? (double)transient / (double)s.segment_count : NAN);
+                fprintf(tsv, "\t%d\n", o->rounds);
+            }
         }
         scene_free(&s);
+    }
+    if (tsv) {
+        fclose(tsv);
+        printf("TSV: %s\n", o->tsv_path);
     }
     return failures ? 1 : 0;
 }

@@ -53,7 +53,15 @@ FILE *tsv_open(const options *o)
                     ray_kind_names[k], o->thread_counts[t], ray_kind_names[k], o->thread_counts[t], ray_kind_names[k],
                     o->thread_counts[t], ray_kind_names[k], o->thread_counts[t], ray_kind_names[k], o->thread_counts[t]);
     /* the scene's arrays (layout.c): the strands' order, and the memory they are in */
-    fputs("\tstrand_order\tarray_memory\tarray_huge_page_bytes\n", f);
+    fputs("\tstrand_order\tarray_memory\tarray_huge_page_bytes", f);
+    /* each peer pair's ratio within rounds (peer_pairs: ROW / PEER), on ROW's row; NaN on the others */
+    for (int p = 0; p < PEER_PAIR_COUNT; p++)
+        for (int k = 0; k < RAY_KIND_COUNT; k++)
+            for (int t = 0; t < o->thread_count_count; t++)
+                fprintf(f, "\t%s_per_%s_%ut\t%s_per_%s_%ut_min\t%s_per_%s_%ut_max", ray_kind_names[k],
+                        peer_pairs[p].peer, o->thread_counts[t], ray_kind_names[k], peer_pairs[p].peer,
+                        o->thread_counts[t], ray_kind_names[k], peer_pairs[p].peer, o->thread_counts[t]);
+    fputc('\n', f);
     return f;
 }
 
@@ -97,9 +105,20 @@ void tsv_write_scene(FILE *f, const options *o, const scene_result *sr, const in
                 tsv_number(f, "\t%.4f", r->ratio[k][t].min);
                 tsv_number(f, "\t%.4f", r->ratio[k][t].max);
             }
-        fprintf(f, "\t%s\t%s\t%lld\n", sr->layout.order == STRAND_ORDER_GENERATED && sr->layout.from_file
+        fprintf(f, "\t%s\t%s\t%lld", sr->layout.order == STRAND_ORDER_GENERATED && sr->layout.from_file
                                               ? "file" : strand_order_names[sr->layout.order],
                 sr->layout.huge_pages ? "madvise-hugepage" : "malloc", sr->layout.huge_page_bytes);
+        for (int p = 0; p < PEER_PAIR_COUNT; p++) {
+            int own = strcmp(v->key, peer_pairs[p].row) == 0;
+            for (int k = 0; k < RAY_KIND_COUNT; k++)
+                for (int t = 0; t < o->thread_count_count; t++) {
+                    spread x = own ? sr->peer_ratio[p][k][t] : (spread){NAN, NAN, NAN};
+                    tsv_number(f, "\t%.4f", x.median);
+                    tsv_number(f, "\t%.4f", x.min);
+                    tsv_number(f, "\t%.4f", x.max);
+                }
+        }
+        fputc('\n', f);
     }
     fflush(f);
 }
