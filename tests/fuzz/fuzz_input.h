@@ -165,7 +165,7 @@ static int rounding_decided(const hairobb_bvh *bvh, const hairobb_ray *ray, cons
 #ifdef FUZZ_ANY_SIZE
     return 0;
 #endif
-    if (!hairobb_interpolate(bvh, 0, hit->prim_id, hit->u, ray->time, p, NULL, NULL)) return 0;
+    if (!hairobb_interpolate(bvh, hit->group_id, hit->prim_id, hit->u, ray->time, p, NULL, NULL)) return 0;
     for (j = 0; j < 3; ++j) scale += fabsf(p[j]) + fabsf(ray->org[j]);
     return !(p[3] > scale * (1.0f / 65536.0f));
 }
