@@ -359,9 +359,10 @@ function readme_glance(    r, line, s, n_scenes, list) {
     n_scenes = scene_count["trace"]
     for (s = 1; s <= n_scenes; s++)
         list = list (s == 1 ? "" : s == n_scenes ? " and " : ", ") scenes["trace", s]
-    emit("glance", "From one run of `make figures` (" link("") ", commit " commit ", " date ") on " machine "; " \
-         compiler "; Embree " embree ". hairobb / Embree, medians of the ratios taken within rounds, ranged over " \
-         "the scenes (" list "); trace ratios are of speed (above 1: hairobb is faster):")
+    # the manual names the run (its file holds the commit, date and compiler) and the machine, nothing dated
+    emit("glance", "From one run of `make figures` ([its output](" file ")) on " machine ", against Embree " embree \
+         ". hairobb / Embree, medians of the ratios taken within rounds, ranged over the scenes (" list \
+         "); trace ratios are of speed (above 1: hairobb is faster):")
     emit("glance", "")
     emit("glance", "| hairobb / Embree, " threads_text() " threads | primary rays | incoherent rays | shadow rays |")
     emit("glance", "|---|---|---|---|")
