@@ -458,7 +458,7 @@ static int nearer_of(int got_r, const hairobb_hit *hr, int got_t, const hairobb_
    in pieces precision refused; group stats name the shapes. */
 static void test_mixed_shapes(const grouped *gr_in, const float *org, const float *dir, size_t rays)
 {
-    grouped gr = *gr_in, as_ribbons, as_tubes;   /* shallow: only the shapes change */
+    grouped gr = *gr_in, as_options;   /* shallow: only the shapes change */
     hairobb_group_shape shapes[MAX_GROUPS];
     hairobb_build_options o = hairobb_default_options(), round_options;
     hairobb_bvh *mixed = NULL, *ribbons = NULL, *tubes = NULL, *loaded = NULL, *other = NULL;
@@ -478,13 +478,12 @@ static void test_mixed_shapes(const grouped *gr_in, const float *org, const floa
     round_options.shape = HAIROBB_SHAPE_ROUND;
     r = hairobb_build_groups(gr.group, gr.count, &o, &mixed);
     CHECK(r == HAIROBB_OK, "mixed shapes: builds: %s", hairobb_result_string(r));
-    as_ribbons = as_tubes = gr;
+    as_options = gr;   /* every group the options' shape: built as ribbons and as tubes */
     for (g = 0; g < gr.count; ++g) {
-        as_ribbons.group[g].shape = HAIROBB_GROUP_SHAPE_OPTIONS;
-        as_tubes.group[g].shape = HAIROBB_GROUP_SHAPE_OPTIONS;
+        as_options.group[g].shape = HAIROBB_GROUP_SHAPE_OPTIONS;
     }
-    CHECK(hairobb_build_groups(as_ribbons.group, gr.count, &o, &ribbons) == HAIROBB_OK &&
-              hairobb_build_groups(as_tubes.group, gr.count, &round_options, &tubes) == HAIROBB_OK,
+    CHECK(hairobb_build_groups(as_options.group, gr.count, &o, &ribbons) == HAIROBB_OK &&
+              hairobb_build_groups(as_options.group, gr.count, &round_options, &tubes) == HAIROBB_OK,
           "mixed shapes: the one-shape BVHs");
     if (!mixed || !ribbons || !tubes) return;
     fr.shapes = ft.shapes = shapes;
@@ -567,7 +566,7 @@ static void test_mixed_shapes(const grouped *gr_in, const float *org, const floa
            build, save and load as ribbons, the empty group's shape kept */
         hairobb_group with_empty[MAX_GROUPS + 1], as_ribbon[MAX_GROUPS + 1];
         hairobb_bvh *plain = NULL;
-        memcpy(with_empty, as_ribbons.group, gr.count * sizeof with_empty[0]);
+        memcpy(with_empty, as_options.group, gr.count * sizeof with_empty[0]);
         with_empty[gr.count] = gr.group[0];
         with_empty[gr.count].segment_count = 0;
         with_empty[gr.count].shape = HAIROBB_GROUP_SHAPE_ROUND;
