@@ -8299,15 +8299,17 @@ static float hairobb__tube_edge(const hairobb__ray_poly *p, float lo, float hi, 
 }
 
 /* u at samples first .. first + 7 of [a, b] cut into `samples` steps:
-   sample 0 is a and sample `samples` b exactly, and lanes past it are b. */
-HAIROBB__INLINE void hairobb__tube_sample_u(float a, float b, int samples, int first, float out[8])
+   sample 0 is a and sample `samples` b exactly, and lanes past it are b.
+   out has room for 16 floats: b goes into the lanes from sample `samples`
+   on as one store of 8 (a loop of scalar stores cost more), which may
+   write up to 7 floats past lane 7. */
+HAIROBB__INLINE void hairobb__tube_sample_u(float a, float b, int samples, int first, float out[16])
 {
     static const float lane_index[8] = {0.0f, 1.0f, 2.0f, 3.0f, 4.0f, 5.0f, 6.0f, 7.0f};
     hairobb__v8 step = hairobb__v8_div(hairobb__v8_add(hairobb__v8_set1((float)first), hairobb__v8_load(lane_index)),
                                        hairobb__v8_set1((float)samples));
-    int lane;
     hairobb__v8_store(out, hairobb__v8_add(hairobb__v8_set1(a), hairobb__v8_mul(hairobb__v8_set1(b - a), step)));
-    for (lane = samples - first; lane < 8; ++lane) out[lane] = b;   /* first <= samples */
+    if (samples - first < 8) hairobb__v8_store(out + (samples - first), hairobb__v8_set1(b));   /* first <= samples */
     if (first == 0) out[0] = a;
 }
 
@@ -8504,7 +8506,7 @@ static int hairobb__tube_inside(hairobb__ray_state *rs, const hairobb__tube_segm
 {
     const hairobb__ray_poly *p = &seg->poly;
     hairobb__tube_point end;
-    float u_lanes[8], g_lanes[2][8], z_lanes[8], g_previous[2], u_previous = a, z_previous = 0.0f;
+    float u_lanes[16], g_lanes[2][8], z_lanes[8], g_previous[2], u_previous = a, z_previous = 0.0f;
     /* the exit sheet's sign changes, refined after the entry sheet's (a
        nearest hit) unless hairobb__tube_root_unreachable then rules them
        out */
@@ -8614,7 +8616,7 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
     hairobb__tube_segment seg;
     hairobb__tube_point at_end;
     float start = -1.0f, bernstein[8], scale;
-    float sample_u[HAIROBB__TUBE_SAMPLES + 8], sample_q[HAIROBB__TUBE_SAMPLES + 8], sample_slope[HAIROBB__TUBE_SAMPLES + 8];
+    float sample_u[HAIROBB__TUBE_SAMPLES + 16], sample_q[HAIROBB__TUBE_SAMPLES + 8], sample_slope[HAIROBB__TUBE_SAMPLES + 8];
     float min_tangent2 = 0.0f, margin, u_lo, u_hi;
     int k, samples, found = 0, first_below, last_below, first;
     unsigned nonpositive, carry_inside = 0, carry_negative = 0;
