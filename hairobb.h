@@ -6981,6 +6981,11 @@ static inline hairobb__v4 hairobb__v4_pairs(hairobb__v4 a, hairobb__v4 b, int k)
     return k == 0 ? _mm_shuffle_ps(a, b, _MM_SHUFFLE(1, 0, 1, 0)) :
            k == 1 ? _mm_shuffle_ps(a, b, _MM_SHUFFLE(2, 1, 2, 1)) : _mm_shuffle_ps(a, b, _MM_SHUFFLE(3, 2, 3, 2));
 }
+/* (a1, a2, a3, b0): each lane the one after it (moves only). */
+static inline hairobb__v4 hairobb__v4_next(hairobb__v4 a, hairobb__v4 b)
+{
+    return _mm_shuffle_ps(a, _mm_shuffle_ps(a, b, _MM_SHUFFLE(0, 0, 3, 3)), _MM_SHUFFLE(2, 0, 2, 1));
+}
 /* Rows a..d become columns (moves only). */
 static inline void hairobb__v4_transpose(hairobb__v4 *a, hairobb__v4 *b, hairobb__v4 *c, hairobb__v4 *d) { _MM_TRANSPOSE4_PS(*a, *b, *c, *d); }
 /* max(max(a0, a2), max(a1, a3)) with max's NaN rule. */
@@ -7037,6 +7042,7 @@ static inline hairobb__v4 hairobb__v4_pairs(hairobb__v4 a, hairobb__v4 b, int k)
            k == 1 ? vcombine_f32(vget_low_f32(vextq_f32(a, a, 1)), vget_low_f32(vextq_f32(b, b, 1))) :
                     vcombine_f32(vget_high_f32(a), vget_high_f32(b));
 }
+static inline hairobb__v4 hairobb__v4_next(hairobb__v4 a, hairobb__v4 b) { return vextq_f32(a, b, 1); }
 static inline void hairobb__v4_transpose(hairobb__v4 *a, hairobb__v4 *b, hairobb__v4 *c, hairobb__v4 *d)
 {
     float32x4_t ab0 = vtrn1q_f32(*a, *b), ab1 = vtrn2q_f32(*a, *b);   /* a0 b0 a2 b2, a1 b1 a3 b3 */
@@ -7105,6 +7111,12 @@ static inline hairobb__v4 hairobb__v4_pairs(hairobb__v4 a, hairobb__v4 b, int k)
     r.f[0] = a.f[k]; r.f[1] = a.f[k + 1]; r.f[2] = b.f[k]; r.f[3] = b.f[k + 1];
     return r;
 }
+static inline hairobb__v4 hairobb__v4_next(hairobb__v4 a, hairobb__v4 b)
+{
+    hairobb__v4 r;
+    r.f[0] = a.f[1]; r.f[1] = a.f[2]; r.f[2] = a.f[3]; r.f[3] = b.f[0];
+    return r;
+}
 static inline void hairobb__v4_transpose(hairobb__v4 *a, hairobb__v4 *b, hairobb__v4 *c, hairobb__v4 *d)
 {
     hairobb__v4 *rows[4];
@@ -7134,6 +7146,19 @@ static inline hairobb__v8 hairobb__v8_max(hairobb__v8 a, hairobb__v8 b) { return
 static inline int hairobb__v8_le_bits(hairobb__v8 a, hairobb__v8 b) { return _mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LE_OQ)); }
 static inline int hairobb__v8_lt_bits(hairobb__v8 a, hairobb__v8 b) { return _mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_LT_OQ)); }
 static inline void hairobb__v8_store(float *p, hairobb__v8 a) { _mm256_storeu_ps(p, a); }
+/* Each lane the one after it, lane 7 `last` (moves only). */
+#if HAIROBB__AVX2
+static inline hairobb__v8 hairobb__v8_next(hairobb__v8 a, float last)
+{
+    return _mm256_blend_ps(_mm256_permutevar8x32_ps(a, _mm256_setr_epi32(1, 2, 3, 4, 5, 6, 7, 7)), _mm256_set1_ps(last), 0x80);
+}
+#else
+static inline hairobb__v8 hairobb__v8_next(hairobb__v8 a, float last)
+{
+    __m128 lo = _mm256_castps256_ps128(a), hi = _mm256_extractf128_ps(a, 1);
+    return _mm256_insertf128_ps(_mm256_castps128_ps256(hairobb__v4_next(lo, hi)), hairobb__v4_next(hi, _mm_set1_ps(last)), 1);
+}
+#endif
 #if HAIROBB__AVX2
 /* lane i = a[index[i]], index in 0..3 */
 static inline hairobb__v8 hairobb__v8_pick4(const float *a, const int *index)
@@ -7173,6 +7198,13 @@ static inline hairobb__v8 hairobb__v8_max(hairobb__v8 a, hairobb__v8 b) { HAIROB
 static inline int hairobb__v8_le_bits(hairobb__v8 a, hairobb__v8 b) { return hairobb__v4_le_bits(a.lo, b.lo) | (hairobb__v4_le_bits(a.hi, b.hi) << 4); }
 static inline int hairobb__v8_lt_bits(hairobb__v8 a, hairobb__v8 b) { return hairobb__v4_lt_bits(a.lo, b.lo) | (hairobb__v4_lt_bits(a.hi, b.hi) << 4); }
 static inline void hairobb__v8_store(float *p, hairobb__v8 a) { hairobb__v4_store(p, a.lo); hairobb__v4_store(p + 4, a.hi); }
+static inline hairobb__v8 hairobb__v8_next(hairobb__v8 a, float last)
+{
+    hairobb__v8 r;
+    r.lo = hairobb__v4_next(a.lo, a.hi);
+    r.hi = hairobb__v4_next(a.hi, hairobb__v4_set1(last));
+    return r;
+}
 static inline hairobb__v8 hairobb__v8_pick4(const float *a, const int *index)
 {
     float lanes[8];
@@ -8060,7 +8092,15 @@ static int hairobb__intersect_curve(const hairobb_bvh *bvh, hairobb__ray_state *
         unsigned bits, inside;
         float s_lanes[8];
         hairobb__piece_ends(w[0], c, &end_x[0], &end_y[0], &end_r[0]);
-        hairobb__piece_ends(w[1], c, &end_x[1], &end_y[1], &end_r[1]);
+        if (bvh->pieces == 8) {
+            /* a piece ends where the next begins (the same weights), the
+               last at control point 3 (weights 0, 0, 0, 1) */
+            end_x[1] = hairobb__v8_next(end_x[0], c->x[3]);
+            end_y[1] = hairobb__v8_next(end_y[0], c->y[3]);
+            end_r[1] = hairobb__v8_next(end_r[0], c->r[3]);
+        } else {
+            hairobb__piece_ends(w[1], c, &end_x[1], &end_y[1], &end_r[1]);
+        }
         /* closest point of each chord to the ray axis (Nakamaru and Ohno) */
         dx = hairobb__v8_sub(end_x[1], end_x[0]);
         dy = hairobb__v8_sub(end_y[1], end_y[0]);
@@ -9792,6 +9832,8 @@ HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairob
 #define hairobb__tube_q_v8 hairobb__tube_q_v8_avx2
 #define hairobb__tube_square hairobb__tube_square_avx2
 #define hairobb__v8_pick4 hairobb__v8_pick4_avx2
+#define hairobb__v8_next hairobb__v8_next_avx2
+#define hairobb__v4_next hairobb__v4_next_avx2
 #define hairobb__horner_v8 hairobb__horner_v8_avx2
 #define hairobb__tube_g_v8 hairobb__tube_g_v8_avx2
 #define hairobb__ray_point hairobb__ray_point_avx2
