@@ -7,7 +7,8 @@
    usage: hits_hash --write FILE   combed fur and curly fur (scenes.h), raw
           hits_hash FILE           one line a scene and option set: the hash
                                    of its saved tree, and of its hits
-   Each option set is built on all cores (the Windows build: Win32 threads),
+   The option sets cover ribbons and round curves (tubes, with and without
+   end caps). Each is built on all cores (the Windows build: Win32 threads),
    then traced: primary rays on a grid, a shadow ray from each, and a bounce
    leaving each hit (hairobb_intersect1_from). Every bit of every hit
    (prim_id, t, u, v, Ng, tangent) and every occlusion answer is hashed.
@@ -140,15 +141,18 @@ int main(int argc, char **argv)
                 if (vertices[4 * v + k] < lower[k]) lower[k] = vertices[4 * v + k];
                 if (vertices[4 * v + k] > upper[k]) upper[k] = vertices[4 * v + k];
             }
-        for (set = 0; set < 4; ++set) {
-            static const char *names[4] = {"defaults", "spatial splits, clustering", "no copy", "Catmull-Rom"};
+        for (set = 0; set < 6; ++set) {
+            static const char *names[6] = {"defaults", "spatial splits, clustering", "no copy", "Catmull-Rom", "round curves",
+                                           "round curves, end caps, Catmull-Rom"};
             hairobb_build_options options;
             int hits;
             uint64_t h, tree;
             memset(&options, 0, sizeof options);
             if (set == 1) { options.spatial_splits = HAIROBB_ON; options.clustering = HAIROBB_ON; }
             if (set == 2) options.bezier_copy = HAIROBB_OFF;
-            if (set == 3) options.basis = HAIROBB_BASIS_CATMULL_ROM;
+            if (set == 3 || set == 5) options.basis = HAIROBB_BASIS_CATMULL_ROM;
+            if (set >= 4) options.shape = HAIROBB_SHAPE_ROUND;
+            if (set == 5) options.end_caps = HAIROBB_ON;
             h = hash_hits(vertices, (size_t)counts[0], indices, (size_t)counts[1], &options, lower, upper, &hits, &tree);
             printf("%s, %s: tree %016llx, %d of %d rays hit, hits %016llx\n", scene ? "curly" : "combed", names[set],
                    (unsigned long long)tree, hits, SIDE * SIDE, (unsigned long long)h);
