@@ -283,7 +283,8 @@ profile: $(B)/bench_profile $(B)/bench_counted
 
 # the working tree's hairobb.h against another commit's (AB_BASE, default
 # HEAD), built into one program and timed in alternating passes over the
-# same rays (bench/ab.c; AB="..." adds its options)
+# same rays, or building in alternating rounds (AB="--builds ...") (bench/ab.c;
+# AB="..." adds its options)
 AB_BASE ?= HEAD
 ab: | $(B)
 	sh bench/ab.sh $(AB_BASE) $(AB)

@@ -7,7 +7,13 @@
    The copies must agree on every hit (a hash of every prim id and t, and
    every occlusion answer); a difference is reported.
 
-   usage: build/ab [--scene LIST] [--rounds N] [--res N]
+   --builds times the builders instead: a round builds with each copy
+   (each freed before the next) in alternating order, on all cores and on
+   1 thread; the ratio test time / base time is taken within the round.
+   The copies must build the same tree (a hash of its nodes and leaves, on
+   either thread count); a difference is reported.
+
+   usage: build/ab [--builds] [--scene LIST] [--rounds N] [--res N]
      --scene   combed, curly, crossing (procedural, generated order; NAME:N
                for a size, e.g. combed:2M), furball, straight (the tests'
                data files), default combed,combed:2M
@@ -52,6 +58,59 @@ static int load(const char *name, hair_scene *s)
     }
     fprintf(stderr, "ab: unknown scene %s\n", name);
     return -1;
+}
+
+/* seconds of one build with either copy (test or base), freed after */
+static double time_build(const hair_scene *s, int test, unsigned threads, uint64_t *hash)
+{
+    double t0 = scene_now(), t1;
+    void *bvh = test ? ab_test_build_threads(s, threads) : ab_base_build_threads(s, threads);
+    t1 = scene_now();
+    if (!bvh) {
+        fprintf(stderr, "ab: a build failed\n");
+        exit(1);
+    }
+    if (hash) *hash = test ? ab_test_tree_hash(bvh) : ab_base_tree_hash(bvh);
+    if (test) ab_test_free(bvh); else ab_base_free(bvh);
+    return t1 - t0;
+}
+
+static void build_scene(const char *name, int rounds)
+{
+    static const unsigned threads[2] = {0, 1};
+    static const char *thread_names[2] = {"all cores", "1 thread"};
+    hair_scene s;
+    double *ratio, seconds[2][2] = {{0, 0}, {0, 0}};
+    int k, round;
+    if (load(name, &s) != 0) return;
+    ratio = (double *)malloc(sizeof *ratio * (size_t)rounds * 2);
+    if (!ratio) { fprintf(stderr, "ab: out of memory\n"); exit(1); }
+    for (k = 0; k < 2; ++k) {
+        uint64_t base_hash, test_hash;
+        time_build(&s, 0, threads[k], &base_hash);
+        time_build(&s, 1, threads[k], &test_hash);
+        if (base_hash != test_hash) printf("%s: the copies' trees DIFFER (%s)\n", name, thread_names[k]);
+    }
+    for (round = 0; round < rounds; ++round)
+        for (k = 0; k < 2; ++k) {
+            /* base first in even rounds */
+            double first = time_build(&s, round & 1, threads[k], NULL), second = time_build(&s, !(round & 1), threads[k], NULL);
+            double base_s = round & 1 ? second : first, test_s = round & 1 ? first : second;
+            ratio[k * rounds + round] = test_s / base_s;
+            seconds[k][0] += base_s;
+            seconds[k][1] += test_s;
+        }
+    printf("%s: %zu segments, %d rounds of builds; test time / base time within rounds: median [min-max] (quartiles)\n", name,
+           s.segment_count, rounds);
+    for (k = 0; k < 2; ++k) {
+        double *r = ratio + k * rounds;
+        qsort(r, (size_t)rounds, sizeof *r, compare_doubles);
+        printf("  %-9s %.3f [%.3f-%.3f] (%.3f-%.3f); base %.4f s, test %.4f s (means)\n", thread_names[k], r[rounds / 2], r[0],
+               r[rounds - 1], r[rounds / 4], r[(3 * rounds) / 4], seconds[k][0] / rounds, seconds[k][1] / rounds);
+    }
+    fflush(stdout);
+    free(ratio);
+    scene_free(&s);
 }
 
 static void run_scene(const char *name, int rounds, int side)
@@ -135,14 +194,15 @@ static void run_scene(const char *name, int rounds, int side)
 int main(int argc, char **argv)
 {
     const char *scenes = "combed,combed:2M";
-    int rounds = 15, side = 512, a;
+    int rounds = 15, side = 512, builds = 0, a;
     char list[1024], *name, *save = NULL;
     for (a = 1; a < argc; ++a) {
-        if (!strcmp(argv[a], "--scene") && a + 1 < argc) scenes = argv[++a];
+        if (!strcmp(argv[a], "--builds")) builds = 1;
+        else if (!strcmp(argv[a], "--scene") && a + 1 < argc) scenes = argv[++a];
         else if (!strcmp(argv[a], "--rounds") && a + 1 < argc) rounds = atoi(argv[++a]);
         else if (!strcmp(argv[a], "--res") && a + 1 < argc) side = atoi(argv[++a]);
         else {
-            fprintf(stderr, "usage: %s [--scene LIST] [--rounds N] [--res N] (see bench/ab.c)\n", argv[0]);
+            fprintf(stderr, "usage: %s [--builds] [--scene LIST] [--rounds N] [--res N] (see bench/ab.c)\n", argv[0]);
             return 2;
         }
     }
@@ -151,6 +211,9 @@ int main(int argc, char **argv)
         return 2;
     }
     strcpy(list, scenes);
-    for (name = strtok_r(list, ",", &save); name; name = strtok_r(NULL, ",", &save)) run_scene(name, rounds, side);
+    for (name = strtok_r(list, ",", &save); name; name = strtok_r(NULL, ",", &save)) {
+        if (builds) build_scene(name, rounds);
+        else run_scene(name, rounds, side);
+    }
     return 0;
 }

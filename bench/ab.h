@@ -18,9 +18,13 @@ typedef struct ab_hit {
 } ab_hit;
 
 void *ab_base_build(const hair_scene *s);
+void *ab_base_build_threads(const hair_scene *s, unsigned threads);
+uint64_t ab_base_tree_hash(const void *bvh);
 void ab_base_free(void *bvh);
 uint64_t ab_base_trace(void *bvh, const ab_rays *r, ab_hit *hits);
 void *ab_test_build(const hair_scene *s);
+void *ab_test_build_threads(const hair_scene *s, unsigned threads);
+uint64_t ab_test_tree_hash(const void *bvh);
 void ab_test_free(void *bvh);
 uint64_t ab_test_trace(void *bvh, const ab_rays *r, ab_hit *hits);
 #endif

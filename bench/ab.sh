@@ -3,6 +3,7 @@
 # process (bench/ab.c).
 # usage: sh bench/ab.sh BASE [ab options]   (BASE: a commit, default HEAD)
 #   e.g. make ab AB_BASE=HEAD~3 AB="--scene combed,crossing:500k --rounds 21"
+#   builds: make ab AB_BASE=main AB="--builds --scene combed,combed:2M --rounds 21"
 set -e
 base=${1:-HEAD}
 [ $# -gt 0 ] && shift

@@ -1,7 +1,8 @@
 /* ab_copy.c - one copy of hairobb for bench/ab.c, compiled twice: once
    from the version under test and once from the base version
    (-DAB_HEADER, -DAB_NAME(x) gives each copy's names). HAIROBB_STATIC
-   keeps the two implementations apart in one program. -DAB_ROUND builds
+   keeps the two implementations apart in one program (and lets ab.c's
+   build mode hash the tree's internals). -DAB_ROUND builds
    both with round curves (CFLAGS_AB=-DAB_ROUND). */
 #define _POSIX_C_SOURCE 200809L
 #define HAIROBB_STATIC
@@ -9,15 +10,33 @@
 #include AB_HEADER
 #include "ab.h"
 
-void *AB_NAME(build)(const hair_scene *s)
+/* threads: the build's (0: one per core) */
+void *AB_NAME(build_threads)(const hair_scene *s, unsigned threads)
 {
     hairobb_bvh *bvh = NULL;
     hairobb_build_options options;
     memset(&options, 0, sizeof options);
+    options.threads = threads;
 #ifdef AB_ROUND
     options.shape = HAIROBB_SHAPE_ROUND;
 #endif
     return hairobb_build(s->vertices, s->vertex_count, s->indices, s->segment_count, &options, &bvh) == HAIROBB_OK ? bvh : NULL;
+}
+
+void *AB_NAME(build)(const hair_scene *s) { return AB_NAME(build_threads)(s, 0); }
+
+/* FNV-1a over what the tree is: its nodes' bytes, the leaves' segment ids
+   and the root; the two copies must build the same tree (--builds) */
+uint64_t AB_NAME(tree_hash)(const void *tree)
+{
+    const hairobb_bvh *bvh = (const hairobb_bvh *)tree;
+    uint64_t h = 14695981039346656037ull;
+    const unsigned char *p;
+    size_t i;
+    for (p = bvh->nodes, i = 0; i < bvh->node_bytes; ++i) h = (h ^ p[i]) * 1099511628211ull;
+    for (p = (const unsigned char *)bvh->leaf_prims, i = 0; i < sizeof(uint32_t) * bvh->leaf_prim_count; ++i)
+        h = (h ^ p[i]) * 1099511628211ull;
+    return (h ^ bvh->root) * 1099511628211ull;
 }
 
 void AB_NAME(free)(void *bvh) { hairobb_free((hairobb_bvh *)bvh); }
