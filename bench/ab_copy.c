@@ -5,6 +5,7 @@
    build mode hash the tree's internals). -DAB_ROUND builds
    both with round curves (CFLAGS_AB=-DAB_ROUND). */
 #define _POSIX_C_SOURCE 200809L
+#define _DEFAULT_SOURCE   /* madvise(MADV_HUGEPAGE), as gnu C and C++ builds and the bench have it (HAIROBB_NO_HUGE_PAGES) */
 #define HAIROBB_STATIC
 #define HAIROBB_IMPLEMENTATION
 #include AB_HEADER
