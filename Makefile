@@ -42,7 +42,7 @@ FUZZCC    = clang
 FUZZ      = -std=c99 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -ffp-contract=off -I.
 FUZZ_SECONDS ?= 1800
 
-.PHONY: all test check deps compile-matrix bench profile ab examples clean fuzz tree-hashes figures
+.PHONY: all test check deps compile-matrix bench profile instructions ab examples clean fuzz tree-hashes figures
 all: $(TESTS) $(SANITIZED) $(B)/bench examples
 
 deps:
@@ -280,6 +280,15 @@ bench: $(B)/bench
 # fixed addresses for addr2line
 profile: $(B)/bench_profile $(B)/bench_counted
 	sh bench/profile.sh $(PROFILE)
+
+# the quick count for kernel work: hairobb's instructions a ray on combed
+# 200k, 128x128 camera rays, ribbons and round curves, by callgrind
+# (bench/instructions.sh; about 20 seconds)
+instructions: $(B)/instructions
+	sh bench/instructions.sh
+
+$(B)/instructions: bench/instructions.c hairobb.h tests/scenes.h | $(B)
+	$(CC) $(BASE) bench/instructions.c -o $@ $(LIBS)
 
 # the working tree's hairobb.h against another commit's (AB_BASE, default
 # HEAD), built into one program and timed in alternating passes over the

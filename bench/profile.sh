@@ -12,14 +12,7 @@
 B=build
 out=$B/profile
 set -e
-if ! command -v valgrind > /dev/null 2>&1; then
-    if [ "$(id -u)" = 0 ] && command -v apt-get > /dev/null 2>&1; then
-        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq valgrind >&2
-    else
-        echo "profile: valgrind is missing. Run: sudo apt-get install valgrind" >&2
-        exit 1
-    fi
-fi
+sh bench/need_valgrind.sh profile
 rm -rf "$out"
 mkdir -p "$out"
 # the defaults for what the caller leaves out (--scene adds scenes: given twice, one would run twice)
