@@ -14,6 +14,7 @@ command -v clang >/dev/null 2>&1 || missing="$missing clang"   # the libFuzzer t
 [ -f /usr/include/stb/stb_image_write.h ] || missing="$missing libstb-dev"   # examples/render.c
 # the cross tiers: installed as root; elsewhere they skip, saying so
 command -v x86_64-w64-mingw32-gcc >/dev/null 2>&1 || cross="$cross gcc-mingw-w64-x86-64"
+command -v x86_64-w64-mingw32-g++ >/dev/null 2>&1 || cross="$cross g++-mingw-w64-x86-64"   # its compile matrix (C++11)
 command -v wine >/dev/null 2>&1 || cross="$cross wine64"
 # the AArch64 tier (tests/run_arm64.sh) and its compile matrix
 command -v aarch64-linux-gnu-gcc >/dev/null 2>&1 || cross="$cross gcc-aarch64-linux-gnu libc6-dev-arm64-cross"
