@@ -26,18 +26,15 @@ void *AB_NAME(build_threads)(const hair_scene *s, unsigned threads)
 
 void *AB_NAME(build)(const hair_scene *s) { return AB_NAME(build_threads)(s, 0); }
 
-/* FNV-1a over what the tree is: its nodes' bytes, the leaves' segment ids
-   and the root; the two copies must build the same tree (--builds) */
+/* A hash of what the tree is (the copy's own hairobb__hash): its nodes'
+   bytes, the leaves' segment ids and the root; the two copies must build
+   the same tree (--builds) */
 uint64_t AB_NAME(tree_hash)(const void *tree)
 {
     const hairobb_bvh *bvh = (const hairobb_bvh *)tree;
-    uint64_t h = 14695981039346656037ull;
-    const unsigned char *p;
-    size_t i;
-    for (p = bvh->nodes, i = 0; i < bvh->node_bytes; ++i) h = (h ^ p[i]) * 1099511628211ull;
-    for (p = (const unsigned char *)bvh->leaf_prims, i = 0; i < sizeof(uint32_t) * bvh->leaf_prim_count; ++i)
-        h = (h ^ p[i]) * 1099511628211ull;
-    return (h ^ bvh->root) * 1099511628211ull;
+    uint64_t h = hairobb__hash(0, bvh->nodes, bvh->node_bytes);
+    h = hairobb__hash(h, bvh->leaf_prims, sizeof(uint32_t) * bvh->leaf_prim_count);
+    return hairobb__hash(h, &bvh->root, sizeof bvh->root);
 }
 
 void AB_NAME(free)(void *bvh) { hairobb_free((hairobb_bvh *)bvh); }
