@@ -8714,12 +8714,18 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
     u_lo = u_lo <= 1.0f / 1024.0f ? 0.0f : u_lo - 1.0f / 1024.0f;
     u_hi = u_hi >= 1.0f - 1.0f / 1024.0f ? 1.0f : u_hi + 1.0f / 1024.0f;
     samples = (int)((u_hi - u_lo) * (float)HAIROBB__TUBE_SAMPLES) + 1;
-    /* |P'|^2 below 2^-24 of the control polygon's largest (3 dP)^2: a tangent vanishing */
-    for (k = 0; k < 3; ++k) {
-        float dx = c->x[k + 1] - c->x[k], dy = c->y[k + 1] - c->y[k], dz = c->z[k + 1] - c->z[k];
-        min_tangent2 = hairobb__maxf(min_tangent2, 9.0f * (dx * dx + dy * dy + dz * dz));
+    {
+        /* the control polygon's legs, leg k in lane k (lane 3: 0) */
+        hairobb__v4 x = hairobb__v4_load(c->x), y = hairobb__v4_load(c->y), z = hairobb__v4_load(c->z);
+        hairobb__v4 dx = hairobb__v4_sub(hairobb__v4_next(x, hairobb__v4_set1(c->x[3])), x);
+        hairobb__v4 dy = hairobb__v4_sub(hairobb__v4_next(y, hairobb__v4_set1(c->y[3])), y);
+        hairobb__v4 dz = hairobb__v4_sub(hairobb__v4_next(z, hairobb__v4_set1(c->z[3])), z);
+        /* |P'|^2 below 2^-24 of the control polygon's largest (3 dP)^2: a tangent vanishing */
+        min_tangent2 = hairobb__v4_hmax(hairobb__v4_mul(hairobb__v4_set1(9.0f), hairobb__v4_add(hairobb__v4_add(
+            hairobb__v4_mul(dx, dx), hairobb__v4_mul(dy, dy)), hairobb__v4_mul(dz, dz)))) * (1.0f / 16777216.0f);
+        /* a bound on |z'| over the segment (hairobb__tube_root_unreachable) */
+        seg.reach[0] = hairobb__v4_hmax(hairobb__v4_mul(hairobb__v4_set1(3.0f), hairobb__v4_abs(dz)));
     }
-    min_tangent2 *= 1.0f / 16777216.0f;
     {
         /* and below (16 eps M)^2, M the largest world coordinate: a basis
            converted to Bezier rounds each point by a few ulps of M, so a
@@ -8732,9 +8738,7 @@ static int hairobb__intersect_tube(const hairobb_bvh *bvh, hairobb__ray_state *r
         noise = hairobb__maxf(hairobb__maxf(largest[0], largest[1]), largest[2]) * (16.0f * FLT_EPSILON);
         min_tangent2 = hairobb__maxf(min_tangent2, noise * noise);
     }
-    /* bounds on |z'| and r over the segment (hairobb__tube_root_unreachable) */
-    seg.reach[0] = 0.0f;
-    for (k = 0; k < 3; ++k) seg.reach[0] = hairobb__maxf(seg.reach[0], 3.0f * fabsf(c->z[k + 1] - c->z[k]));
+    /* and a bound on r (hairobb__tube_root_unreachable) */
     seg.reach[1] = hairobb__maxf(hairobb__v4_hmax(hairobb__v4_load(c->r)), 0.0f);
     hairobb__to_power_form(c, &seg.poly);
     seg.bvh = bvh;
