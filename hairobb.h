@@ -1596,18 +1596,6 @@ HAIROBB__INLINE int hairobb__lowest_bit(unsigned bits)
 #endif
 }
 
-/* The number of set bits. */
-HAIROBB__INLINE int hairobb__bit_count(unsigned bits)
-{
-#if defined(__GNUC__) || defined(__clang__)
-    return __builtin_popcount(bits);
-#else
-    bits = bits - ((bits >> 1) & 0x55555555u);
-    bits = (bits & 0x33333333u) + ((bits >> 2) & 0x33333333u);
-    return (int)((((bits + (bits >> 4)) & 0x0f0f0f0fu) * 0x01010101u) >> 24);
-#endif
-}
-
 /* The highest set bit's index; bits != 0. */
 HAIROBB__INLINE int hairobb__highest_bit(unsigned bits)
 {
@@ -6959,6 +6947,20 @@ static int hairobb__ray_setup_from(hairobb__ray_state *rs, const hairobb_bvh *bv
 /* rounding and NaN rule (min(a,b) is a < b ? a : b, as SSE's minps), so    */
 /* every path gives the same answers.                                       */
 /* ------------------------------------------------------------------------ */
+/* The number of set bits (the traversal's): the popcnt instruction in the
+   AVX2 copy and wherever the target has one; on baseline x86-64 a few
+   shifts and masks, where gcc's __builtin_popcount is a call to libgcc. */
+HAIROBB__INLINE int hairobb__bit_count(unsigned bits)
+{
+#if (defined(__GNUC__) || defined(__clang__)) && (HAIROBB__AVX2 || defined(__POPCNT__) || !(defined(__x86_64__) || defined(__i386__)))
+    return __builtin_popcount(bits);
+#else
+    bits = bits - ((bits >> 1) & 0x55555555u);
+    bits = (bits & 0x33333333u) + ((bits >> 2) & 0x33333333u);
+    return (int)((((bits + (bits >> 4)) & 0x0f0f0f0fu) * 0x01010101u) >> 24);
+#endif
+}
+
 #if HAIROBB__SSE
 typedef __m128 hairobb__v4;
 static inline hairobb__v4 hairobb__v4_load(const float *p) { return _mm_loadu_ps(p); }
@@ -9796,6 +9798,7 @@ HAIROBB_DEF int hairobb_scene_occluded1(const hairobb_scene *scene, const hairob
 #define hairobb__tube_segment hairobb__tube_segment_avx2
 #define hairobb__tube_point hairobb__tube_point_avx2
 #define hairobb__tube_change hairobb__tube_change_avx2
+#define hairobb__bit_count hairobb__bit_count_avx2
 #define hairobb__ribbon_segment hairobb__ribbon_segment_avx2
 #define hairobb__bezier_v4 hairobb__bezier_v4_avx2
 #define hairobb__chord_pad hairobb__chord_pad_avx2
