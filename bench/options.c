@@ -44,8 +44,8 @@ static void print_help(void)
            "                        copy: on Bezier scenes other curves through the same points),\n"
            "                        b-spline, b-spline-copy (the same for the uniform B-spline basis)\n"
            "                      Embree: embree-r4 (flat, rate 4: Embree's default, the baseline of every ratio),\n"
-           "                        embree-r8, embree-r16 (flat), embree-avx2, and the peers embree-compact,\n"
-           "                        embree-cycles, embree-round and embree-round-robust (below)\n"
+           "                        embree-r8, embree-r16 (flat), embree-avx2, embree-sse42, embree-avx, and the\n"
+           "                        peers embree-compact, embree-cycles, embree-round and embree-round-robust (below)\n"
            "                      groups: all, hairobb, embree, precision, ablation, bases, tubes (round, embree-round,\n"
            "                        embree-round-robust, default, embree-r4), scale (default, embree-r4,\n"
            "                        embree-compact), yeti (catmull-rom: hairobb C-R without the Bezier copy,\n"
@@ -124,7 +124,9 @@ static void print_help(void)
            "                      Catmull-Rom curves on a Catmull-Rom scene (yeti), as Cycles hands Embree its\n"
            "                      hair; on a Bezier scene, flat Bezier curves with the same flags and rate\n"
            "  embree-avx2         flat r4 on a device limited to Embree's AVX2 kernels (isa=avx2): where the CPU\n"
-           "                      has AVX-512, what Embree's speed owes to it\n");
+           "                      has AVX-512, what Embree's speed owes to it\n"
+           "  embree-sse42,       flat r4 limited to Embree's SSE4.2 or AVX kernels (isa=sse4.2, isa=avx): what a\n"
+           "  embree-avx          CPU without AVX2 runs, the peers of sse2 (hairobb's path there)\n");
 }
 
 /* Parses a count with an optional k or M suffix; 0 on success. */

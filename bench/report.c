@@ -249,7 +249,7 @@ void print_speed_table(const options *o, const scene_result *sr, const int selec
     }
     if (width == 0)
         return;
-    printf("\nthis / its peer (no copy: in memory; round curves: in surface), the ratio taken within each round: "
+    printf("\nthis / its peer (no copy: in memory; round curves: in surface; SSE2 path: on a CPU without AVX2), the ratio taken within each round: "
            "median [min-max]\n");
     printf("%-*s", width, "variant / peer");
     for (int k = 0; k < RAY_KIND_COUNT; k++)

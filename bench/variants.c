@@ -71,6 +71,9 @@ const variant all_variants[] = {
     EMBREE_ROW("embree-round-robust", "Embree round rob. *", EMB_ROUND_BEZIER, 0, RTC_SCENE_FLAG_ROBUST, 0, 0),
     /* Embree's default limited to its AVX2 kernels (where the CPU has AVX-512) */
     EMBREE_ROW("embree-avx2", "Embree r4 AVX2 only", EMB_FLAT_BEZIER, 4, EMB_FLAG_ISA_AVX2, 1, 0),
+    /* limited to its SSE4.2 or AVX kernels: what a CPU without AVX2 gets, the peers of sse2 */
+    EMBREE_ROW("embree-sse42", "Embree r4 SSE4.2 only", EMB_FLAT_BEZIER, 4, EMB_FLAG_ISA_SSE42, 1, 0),
+    EMBREE_ROW("embree-avx", "Embree r4 AVX only", EMB_FLAT_BEZIER, 4, EMB_FLAG_ISA_AVX, 1, 0),
 };
 
 /* VARIANT_COUNT (bench.h) sizes the result arrays: a row added above raises it */
@@ -80,10 +83,11 @@ typedef char variant_table_has_VARIANT_COUNT_rows[sizeof all_variants / sizeof a
 static const struct { const char *name, *members; } variant_groups[] = {
     {"all", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
             "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2,no-copy,round,embree-r4,embree-r8,embree-r16,"
-            "embree-compact,embree-cycles,embree-round,embree-round-robust,embree-avx2"},
+            "embree-compact,embree-cycles,embree-round,embree-round-robust,embree-avx2,embree-sse42,embree-avx"},
     {"hairobb", "default,exact4,exact16,pieces4,pieces8,pieces16,aabb,obb,mixed-uncompressed,spatial,spatial-compressed,"
                 "spatial-compressed-cluster,shared,compressed-shared,build-1t,filter,sse2,no-copy,round"},
-    {"embree", "embree-r4,embree-r8,embree-r16,embree-compact,embree-cycles,embree-round,embree-round-robust,embree-avx2"},
+    {"embree", "embree-r4,embree-r8,embree-r16,embree-compact,embree-cycles,embree-round,embree-round-robust,embree-avx2,"
+               "embree-sse42,embree-avx"},
     {"precision", "default,exact4,exact16,pieces4,pieces8,pieces16"},
     {"ablation", "aabb,obb,mixed-uncompressed,spatial,spatial-compressed,spatial-compressed-cluster,shared,compressed-shared,default"},
     {"mixed", "default"},
@@ -102,6 +106,8 @@ const peer_pair peer_pairs[PEER_PAIR_COUNT] = {
     {"no-copy", "embree-compact"},
     {"round", "embree-round"},
     {"round", "embree-round-robust"},
+    {"sse2", "embree-sse42"},
+    {"sse2", "embree-avx"},
 };
 
 int variant_index(const char *key)

@@ -85,8 +85,12 @@ static inline void emb_free(emb_scene *e)
 }
 
 /* Or'ed into scene_flags, not passed to Embree: the device limited to its
-   AVX2 kernels ("isa=avx2"), to tell its AVX-512 from its design. */
+   AVX2 kernels ("isa=avx2"), to tell its AVX-512 from its design; or to
+   its SSE4.2 or AVX kernels ("isa=sse4.2", "isa=avx"), what a CPU without
+   AVX2 runs (the peers of hairobb's SSE2 path). */
 #define EMB_FLAG_ISA_AVX2 (1u << 30)
+#define EMB_FLAG_ISA_SSE42 (1u << 29)
+#define EMB_FLAG_ISA_AVX (1u << 28)
 
 /* emb_build_curves and emb_build_curves_motion: vertex buffer k (slot k)
    shares time_vertices[k], k < time_steps; time_steps >= 2 sets the
@@ -122,9 +126,12 @@ static inline emb_scene *emb__build_curve_steps(const float *const *time_vertice
     char config[48] = "";
     if (threads > 0)
         snprintf(config, sizeof config, "threads=%d", threads);
-    if (scene_flags & EMB_FLAG_ISA_AVX2) {   /* not a scene flag: the device's ISA */
-        strncat(config, config[0] ? ",isa=avx2" : "isa=avx2", sizeof config - strlen(config) - 1);
-        scene_flags &= ~EMB_FLAG_ISA_AVX2;
+    if (scene_flags & (EMB_FLAG_ISA_AVX2 | EMB_FLAG_ISA_SSE42 | EMB_FLAG_ISA_AVX)) {   /* not scene flags: the device's ISA */
+        const char *isa = scene_flags & EMB_FLAG_ISA_AVX2 ? "isa=avx2" : scene_flags & EMB_FLAG_ISA_AVX ? "isa=avx" : "isa=sse4.2";
+        if (config[0])
+            strncat(config, ",", sizeof config - strlen(config) - 1);
+        strncat(config, isa, sizeof config - strlen(config) - 1);
+        scene_flags &= ~(EMB_FLAG_ISA_AVX2 | EMB_FLAG_ISA_SSE42 | EMB_FLAG_ISA_AVX);
     }
     e->device = rtcNewDevice(config[0] ? config : NULL);
     if (!e->device) {
