@@ -6,7 +6,8 @@
    header (the AVX2 kernels by dispatch). The quick count to decide kernel
    work from (about 20 seconds for both shapes); `make profile` splits a
    ray's instructions by phase and sets them against Embree's.
-   usage: build/instructions ribbon|round
+   usage: build/instructions ribbon|round [sse2]
+   (sse2: options.simd = HAIROBB_SIMD_SSE2, the path of a CPU without AVX2)
    Only trace_rays runs under callgrind's --toggle-collect: the count
    leaves out the scene, the build and the rays' set-up. */
 #define _POSIX_C_SOURCE 200809L
@@ -44,10 +45,12 @@ int main(int argc, char **argv)
     hairobb_bvh *bvh = NULL;
     float *org, *dir;
     size_t hits;
-    if (argc != 2 || (strcmp(argv[1], "ribbon") != 0 && strcmp(argv[1], "round") != 0)) {
-        fprintf(stderr, "usage: instructions ribbon|round\n");
+    if (argc < 2 || argc > 3 || (strcmp(argv[1], "ribbon") != 0 && strcmp(argv[1], "round") != 0) ||
+        (argc == 3 && strcmp(argv[2], "sse2") != 0)) {
+        fprintf(stderr, "usage: instructions ribbon|round [sse2]\n");
         return 2;
     }
+    if (argc == 3) options.simd = HAIROBB_SIMD_SSE2;
     options.shape = strcmp(argv[1], "round") == 0 ? HAIROBB_SHAPE_ROUND : HAIROBB_SHAPE_RIBBON;
     org = (float *)malloc(3 * sizeof(float) * SIDE * SIDE);
     dir = (float *)malloc(3 * sizeof(float) * SIDE * SIDE);
