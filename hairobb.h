@@ -7004,9 +7004,18 @@ static inline hairobb__v4 hairobb__v4_from_bytes(const signed char *q)
     return _mm_cvtepi32_ps(_mm_cvtepi8_epi32(_mm_cvtsi32_si128(packed)));
 }
 #else
+/* SSE2: each byte unpacked with itself into the top of its 32-bit lane,
+   then shifted down arithmetically: the integers SSE4.1's sign extension
+   gives, in 4 instructions where 4 scalar conversions took about 15 */
 static inline hairobb__v4 hairobb__v4_from_bytes(const signed char *q)
 {
-    return _mm_setr_ps((float)q[0], (float)q[1], (float)q[2], (float)q[3]);
+    int packed;
+    __m128i bytes;
+    memcpy(&packed, q, sizeof packed);
+    bytes = _mm_cvtsi32_si128(packed);
+    bytes = _mm_unpacklo_epi8(bytes, bytes);
+    bytes = _mm_unpacklo_epi16(bytes, bytes);
+    return _mm_cvtepi32_ps(_mm_srai_epi32(bytes, 24));
 }
 #endif
 #elif HAIROBB__NEON
