@@ -7223,6 +7223,19 @@ static inline hairobb__v8 hairobb__v8_pick4(const float *a, const int *index)
     for (i = 0; i < 8; ++i) lanes[i] = a[index[i]];
     return hairobb__v8_load(lanes);
 }
+#if HAIROBB__SSE && !HAIROBB__SSE41
+/* SSE2: the 8 bytes in one load, each unpacked with itself, then each
+   half as hairobb__v4_from_bytes */
+static inline hairobb__v8 hairobb__v8_from_bytes(const signed char *q)
+{
+    hairobb__v8 r;
+    __m128i bytes = _mm_loadl_epi64((const __m128i *)(const void *)q);
+    bytes = _mm_unpacklo_epi8(bytes, bytes);
+    r.lo = _mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpacklo_epi16(bytes, bytes), 24));
+    r.hi = _mm_cvtepi32_ps(_mm_srai_epi32(_mm_unpackhi_epi16(bytes, bytes), 24));
+    return r;
+}
+#else
 static inline hairobb__v8 hairobb__v8_from_bytes(const signed char *q)
 {
     hairobb__v8 r;
@@ -7230,6 +7243,7 @@ static inline hairobb__v8 hairobb__v8_from_bytes(const signed char *q)
     r.hi = hairobb__v4_from_bytes(q + 4);
     return r;
 }
+#endif
 #endif
 
 /* Node-wide vectors: one lane per child. */
